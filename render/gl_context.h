@@ -1,0 +1,25 @@
+#pragma once
+// OpenGL 4.5 core contexts. One renderer serves both kinds:
+//  - headless: EGL on the surfaceless Mesa platform (llvmpipe on machines without a GPU, no X server needed),
+//    falling back to the EGL device platform; rendering goes into the renderer's own FBO;
+//  - windowed: GLFW (needs a display; Xvfb works), see render/gl_context_glfw.h.
+// libepoxy resolves GL entry points for either.
+#include <memory>
+#include <string>
+
+namespace strata {
+
+class GlContext {
+ public:
+  virtual ~GlContext() = default;
+  virtual void make_current() = 0;
+  // GL_RENDERER / GL_VERSION strings of the live context, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+  std::string renderer() const;
+  std::string version() const;
+};
+
+// Creates a headless GL 4.5 core context and makes it current on the calling thread.
+// Throws std::runtime_error with a one-line reason (which EGL call failed, with its error code).
+std::unique_ptr<GlContext> create_headless_gl_context();
+
+}  // namespace strata
