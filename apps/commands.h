@@ -1,0 +1,15 @@
+#pragma once
+// Subcommands of the `strata` executable. Each file registers one subcommand on the CLI11 app; the callback
+// stores its exit status in `exit_code`. Errors are one line on stderr ("strata <cmd>: reason") and a non-zero
+// status, never a stack trace.
+namespace CLI {
+class App;
+}
+
+namespace strata::cli {
+
+void add_info_command(CLI::App& app, int& exit_code);
+void add_crowd_command(CLI::App& app, int& exit_code);
+void add_view_command(CLI::App& app, int& exit_code);
+
+}  // namespace strata::cli

@@ -1,0 +1,41 @@
+#pragma once
+// Rig: the immutable data every walker of one body shares (stored once, referenced by id from walker tables).
+// This rig is a skeleton plus its animation clips; later layers add rest meshes per level, the skin
+// binding and action lines here, never per walker.
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "components/animation_clip.h"
+#include "components/skeleton.h"
+
+namespace strata {
+
+struct Rig {
+  std::string name;
+  Skeleton skeleton;
+  std::vector<AnimationClip> clips;
+};
+
+using RigId = std::uint32_t;
+
+class RigLibrary {
+ public:
+  RigId add(Rig rig) {
+    rigs_.push_back(std::make_shared<const Rig>(std::move(rig)));
+    return static_cast<RigId>(rigs_.size() - 1);
+  }
+  const Rig& get(RigId id) const {
+    if (id >= rigs_.size()) throw std::out_of_range("RigLibrary: no rig " + std::to_string(id));
+    return *rigs_[id];
+  }
+  std::shared_ptr<const Rig> share(RigId id) const { return rigs_.at(id); }
+  std::size_t size() const { return rigs_.size(); }
+
+ private:
+  std::vector<std::shared_ptr<const Rig>> rigs_;
+};
+
+}  // namespace strata

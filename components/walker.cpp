@@ -1,0 +1,37 @@
+#include "components/walker.h"
+
+#include <stdexcept>
+
+namespace strata {
+
+std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count) {
+  if (joint_count == 0) throw std::invalid_argument("make_walker_table: a rig needs at least one joint");
+  std::vector<FieldDesc> fields(kWalkerFieldCount);
+  fields[kWalkerPlacement] = {"placement", ScalarType::F32, 4, 0.0f};
+  fields[kWalkerClock] = {"clock", ScalarType::F32, 3, 0.0f};
+  fields[kWalkerLocalRotation] = {"local_rotation", ScalarType::F32, joint_count * 4, 0.0f};
+  fields[kWalkerRootTranslation] = {"root_translation", ScalarType::F32, 3, 0.0f};
+  fields[kWalkerWorld] = {"world", ScalarType::F32, joint_count * kAffineFloats, 0.0f};
+  fields[kWalkerSkinning] = {"skinning", ScalarType::F32, joint_count * kAffineFloats, 0.0f};
+  return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
+}
+
+WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count) {
+  if (table.fields().size() != kWalkerFieldCount || table.fields()[kWalkerLocalRotation].width != joint_count * 4)
+    throw std::invalid_argument("walker_lanes: table '" + table.name() + "' is not a walker table for " +
+                                std::to_string(joint_count) + " joints");
+  WalkerLanes lanes;
+  lanes.count = table.size();
+  lanes.stride = table.stride();
+  lanes.joints = joint_count;
+  if (lanes.count == 0) return lanes;
+  lanes.placement = table.f32_base(kWalkerPlacement);
+  lanes.clock = table.f32_base(kWalkerClock);
+  lanes.local_rotation = table.f32_base(kWalkerLocalRotation);
+  lanes.root_translation = table.f32_base(kWalkerRootTranslation);
+  lanes.world = table.f32_base(kWalkerWorld);
+  lanes.skinning = table.f32_base(kWalkerSkinning);
+  return lanes;
+}
+
+}  // namespace strata

@@ -1,0 +1,48 @@
+#pragma once
+// The walker entity's hot per-frame columns, all in one SoaTable per rig (one row per walker), joint-major:
+// component (j * k + c) of a per-joint field is one contiguous array over walkers, so the FK loop for joint j
+// streams every walker with unit stride.
+//
+// Matrices are 3x4 affine, column-major: components [m00 m10 m20 | m01 m11 m21 | m02 m12 m22 | tx ty tz].
+// The fourth row (0 0 0 1) is implicit; storing it would add a third more bandwidth for constants.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "ecs/soa_table.h"
+
+namespace strata {
+
+inline constexpr std::uint32_t kAffineFloats = 12;
+
+enum WalkerField : std::uint32_t {
+  kWalkerPlacement,        // 4: ground position x, y, z (m) and heading about +Y (rad)
+  kWalkerClock,            // 3: animation time (s), playback rate (1 = real time), clip index (as float)
+  kWalkerLocalRotation,    // joints*4: local joint rotation quaternion x, y, z, w (identity at rest)
+  kWalkerRootTranslation,  // 3: HumanoidRoot translation (m), H-Anim's Humanoid-space offset of the root
+  kWalkerWorld,            // joints*12: F(j), the joint's frame in humanoid space (paper eq. 2)
+  kWalkerSkinning,         // joints*12: F(j) A(j)^-1, rest humanoid space -> posed humanoid space (eq. 3)
+  kWalkerFieldCount
+};
+
+std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count);
+
+// Raw pointers into a walker table for kernels: component c of a field starts at base + c * stride.
+// Valid until the table grows or shrinks; systems build one per frame.
+struct WalkerLanes {
+  std::size_t count = 0;   // walkers
+  std::size_t stride = 0;  // elements between components; >= count, a multiple of the SIMD lane count
+  std::uint32_t joints = 0;
+  float* placement = nullptr;
+  float* clock = nullptr;
+  float* local_rotation = nullptr;
+  float* root_translation = nullptr;
+  float* world = nullptr;
+  float* skinning = nullptr;
+
+  float* at(float* base, std::size_t component) const { return base + component * stride; }
+};
+
+WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count);
+
+}  // namespace strata

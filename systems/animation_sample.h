@@ -1,0 +1,24 @@
+#pragma once
+// Animation system: advances each walker's clock and samples its keyframed clip (X3D interpolators) into the
+// walker's local joint rotations and root translation. Runs first in the frame script; FK reads what it writes.
+#include <span>
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/vec3.hpp>
+
+#include "components/animation_clip.h"
+#include "components/rig.h"
+#include "components/walker.h"
+
+namespace strata {
+
+// Samples `clip` at `time` seconds (wrapped into [0, duration) for looping clips, clamped otherwise).
+// Joints without a track get identity; the root translation is zero without a HumanoidRoot translation track.
+// Rotation keys are slerped along the shorter arc, translations interpolated linearly.
+void sample_clip(const AnimationClip& clip, float time, std::span<glm::quat> rotations, glm::vec3& root_translation);
+
+// For every walker: time += dt * rate, then sample clip number `clock[2]` of the rig (a negative index or a rig
+// without clips gives the rest pose). Walkers are independent, so this runs in parallel chunks.
+void animation_system(const Rig& rig, const WalkerLanes& lanes, float dt);
+
+}  // namespace strata
