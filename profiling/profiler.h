@@ -32,6 +32,13 @@ struct TraceEvent {
   std::uint16_t depth = 0;       // nesting depth on its thread (0 = outermost)
 };
 
+// One completed frame (begin_frame .. end_frame), for the trace's frame markers.
+struct FrameMark {
+  std::uint64_t frame = 0;
+  double start_us = 0;           // begin_frame time (end_frame time if begin_frame was not called)
+  double duration_us = 0;        // 0 if begin_frame was not called
+};
+
 class Profiler {
  public:
   using Clock = std::chrono::steady_clock;
@@ -52,12 +59,18 @@ class Profiler {
   // Records a finished scope (called by ScopedTimer). Thread-safe.
   void record(std::uint32_t name_id, Clock::time_point start, Clock::time_point end, std::uint16_t depth);
 
-  // Rolling statistics, one entry per scope name in first-seen order (the frame script's order).
+  // Rolling statistics, one entry per scope name in first-seen order (the frame script's order). Only completed
+  // frames (end_frame) count; a scope's sample for a frame is the sum of its runs in that frame; the window is
+  // the last `window` frames in which the scope ran; p95 is nearest-rank (the ceil(0.95 n)-th smallest).
   std::vector<SystemStats> stats() const;
   // Fixed-width table: system, last, min, mean, p95, max (ms) and the window length.
   void print_table(std::ostream& out) const;
   // Trace events kept so far (empty when keep_trace is false).
   const std::vector<TraceEvent>& events() const;
+  // Completed frames, one per end_frame (empty when keep_trace is false).
+  // events(), frame_marks() and names() hand out references without locking, and so do the writers that use
+  // them: call them while no other thread is recording or interning.
+  const std::vector<FrameMark>& frame_marks() const;
 
   // Writers; throw std::runtime_error naming the path if it cannot be written.
   void write_chrome_trace(const std::filesystem::path& path) const;
