@@ -1,0 +1,57 @@
+// Google Benchmark: the FK system's throughput in joints per second over crowds of the shipped skeleton.
+#include <benchmark/benchmark.h>
+
+#include <random>
+
+#include <glm/gtc/quaternion.hpp>
+#include <tbb/global_control.h>
+
+#include "io/hanim_loader.h"
+#include "systems/animation_sample.h"
+#include "systems/fk.h"
+#include "systems/frame_script.h"
+
+namespace {
+
+strata::CrowdScene make_scene(std::size_t walkers) {
+  strata::HumanoidAsset asset = strata::load_default_humanoid();
+  strata::Rig rig;
+  rig.skeleton = asset.skeleton;
+  rig.clips = asset.clips;
+  strata::CrowdScene scene(rig);
+  strata::CrowdConfig config;
+  config.walkers = walkers;
+  scene.spawn_grid(config);
+  strata::Profiler profiler(120, false);
+  scene.simulate(0.5f, profiler);  // a non-rest pose
+  return scene;
+}
+
+void BM_FkSingleThread(benchmark::State& state) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  strata::CrowdScene scene = make_scene(static_cast<std::size_t>(state.range(0)));
+  strata::WalkerLanes lanes = scene.lanes();
+  for (auto _ : state) {
+    strata::fk_range(scene.rig().skeleton, lanes, 0, lanes.count);
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<long>(lanes.count * lanes.joints));
+  state.counters["walkers"] = static_cast<double>(lanes.count);
+}
+BENCHMARK(BM_FkSingleThread)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
+
+void BM_AnimationSample(benchmark::State& state) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  strata::CrowdScene scene = make_scene(static_cast<std::size_t>(state.range(0)));
+  strata::WalkerLanes lanes = scene.lanes();
+  for (auto _ : state) {
+    strata::animation_system(scene.rig(), lanes, 1.0f / 60.0f);
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<long>(lanes.count * lanes.joints));
+}
+BENCHMARK(BM_AnimationSample)->Arg(1000)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,133 @@
+// The strata command end to end: real files, a real headless render, outputs parsed back.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status = -1;
+  std::string out;  // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+  // DISPLAY unset: headless rendering must not need an X server.
+  std::string cmd = "env -u DISPLAY " + std::string(STRATA_BINARY) + " " + args + " 2>&1";
+  Result r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  int status = pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+fs::path scratch(const std::string& name) {
+  fs::path p = fs::temp_directory_path() / ("strata_cli_test_" + std::to_string(getpid())) / name;
+  fs::remove_all(p);
+  fs::create_directories(p.parent_path());
+  return p;
+}
+
+std::string source_root() { return fs::path(STRATA_TEST_DATA).parent_path().parent_path().string(); }
+
+TEST(StrataInfo, SummarisesTheShippedSkeleton) {
+  Result r = run("info " + source_root() + "/data/default_skeleton.x3d");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("joints:     25"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("X3D"), std::string::npos) << r.out;
+}
+
+TEST(StrataInfo, LoadsEveryRealHAnimFile) {
+  fs::path dir = fs::path(STRATA_SHARED_DATA) / "hanim_x3d";
+  if (!fs::exists(dir)) GTEST_SKIP() << "no " << dir;
+  for (const char* name : {"JoeSkeletonSkinSiteSaluteWalk.x3d", "StandardHumanoid.x3d", "Humanoid1.x3d"}) {
+    Result r = run("info " + (dir / name).string());
+    EXPECT_EQ(r.status, 0) << name << ": " << r.out;
+  }
+}
+
+TEST(StrataInfo, BadInputFailsWithOneLineNamingTheFile) {
+  fs::path bad = scratch("broken.x3d");
+  std::ofstream(bad) << "<X3D><Scene><HAnimHumanoid name='h'>\n<HAnimJoint name='HumanoidRoot' center='0 1'/>\n"
+                        "</HAnimHumanoid></Scene></X3D>\n";
+  Result r = run("info " + bad.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.out.find("broken.x3d"), std::string::npos) << r.out;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one line: " << r.out;
+
+  Result missing = run("info " + scratch("nope.x3d").string());
+  EXPECT_NE(missing.status, 0);
+  EXPECT_NE(missing.out.find("nope.x3d"), std::string::npos) << missing.out;
+}
+
+TEST(StrataCrowd, WritesFramesTraceCsvAndSummary) {
+  fs::path out = scratch("crowd");
+  Result r = run("crowd --walkers 4 --frames 3 --width 160 --height 120 --no-progress --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  for (const char* f : {"frame_0000.png", "frame_0001.png", "frame_0002.png", "profile.json", "profile.csv",
+                        "summary.json"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  EXPECT_FALSE(fs::exists(out / "frame_0003.png"));
+
+  nlohmann::json trace = nlohmann::json::parse(std::ifstream(out / "profile.json"));
+  std::map<std::string, std::set<long>> frames_by_system;
+  std::map<std::string, int> count_by_system;
+  for (const auto& e : trace.at("traceEvents")) {
+    if (e.at("ph") != "X") continue;
+    frames_by_system[e.at("name")].insert(e.at("args").at("frame").get<long>());
+    ++count_by_system[e.at("name")];
+  }
+  for (const char* system : {"frame", "animation", "fk", "render", "write_png"}) {
+    EXPECT_EQ(count_by_system[system], 3) << system << ": one event per frame";
+    EXPECT_EQ(frames_by_system[system].size(), 3u) << system;
+  }
+
+  nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary.at("walkers"), 4);
+  EXPECT_EQ(summary.at("frames"), 3);
+  EXPECT_EQ(summary.at("skeleton").at("joints"), 25);
+  EXPECT_GT(summary.at("systems").size(), 3u);
+
+  std::ifstream csv(out / "profile.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("system,", 0), 0u) << header;
+
+  // The table goes to stdout with every system in it.
+  for (const char* system : {"animation", "fk", "render"}) EXPECT_NE(r.out.find(system), std::string::npos);
+}
+
+TEST(StrataCrowd, SameSeedSameStateWhateverTheThreadCount) {
+  fs::path da = scratch("a"), db = scratch("b");
+  const std::string common = "crowd --walkers 6 --frames 4 --width 64 --height 48 --no-png --no-progress --seed 9 ";
+  Result a = run(common + "--threads 2 --out " + da.string());
+  Result b = run(common + "--threads 1 --out " + db.string());
+  ASSERT_EQ(a.status, 0) << a.out;
+  ASSERT_EQ(b.status, 0) << b.out;
+  auto ha = nlohmann::json::parse(std::ifstream(da / "summary.json")).at("state_hash");
+  auto hb = nlohmann::json::parse(std::ifstream(db / "summary.json")).at("state_hash");
+  EXPECT_EQ(ha, hb);
+}
+
+TEST(StrataCrowd, UnknownClipIsAOneLineError) {
+  Result r = run("crowd --walkers 1 --frames 1 --clip no_such_clip --no-progress --out " + scratch("c").string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.out.find("no_such_clip"), std::string::npos) << r.out;
+}
+
+}  // namespace
