@@ -17,8 +17,19 @@ struct OrbitCamera {
   glm::vec3 eye() const;
   glm::mat4 view() const;
   glm::mat4 projection(float aspect) const;
-  // Frames an axis-aligned box (e.g. the crowd's bounds) so it fills most of the view at the current yaw/pitch.
+  // Frames an axis-aligned box (e.g. the crowd's bounds) at the current yaw/pitch: targets its centre and sets
+  // the distance so its bounding sphere just fits the narrower of the vertical and horizontal fields of view
+  // (far_plane grows if needed).
   void frame_box(const glm::vec3& box_min, const glm::vec3& box_max, float aspect);
+
+  // Interactive controls for `strata view`, in window pixels (y down) so a drag feels the same at any size.
+  // orbit: a drag across the full viewport height turns the camera by pi; dragging right moves the camera
+  // left round the target (the scene follows the cursor), dragging down raises it.
+  void orbit(float dx_pixels, float dy_pixels, float viewport_height);
+  // pan: moves the target in the view plane so that a point at the target's depth follows the cursor.
+  void pan(float dx_pixels, float dy_pixels, float viewport_height);
+  // zoom: each wheel step (positive = towards the target) scales the distance by 0.85.
+  void zoom(float wheel_steps);
 };
 
 }  // namespace strata

@@ -1,10 +1,12 @@
 #pragma once
 // Draws walkers as skeletons: each bone (parent joint -> child joint) as a lit tapered prism and each joint as
 // a small lit sphere, instanced (one draw for all bones of all walkers, one for all joints), over a ground plane.
-// Renders into its own FBO (multisampled colour + depth, resolved on read); the caller owns the GL context.
+// Renders into its own FBO (4x multisampled colour + depth, resolved into a single-sample FBO at the end of
+// render()); the caller owns the GL context, which must be current for every call including the destructor.
 // Later issues replace bones with skinned bodies; this stays as a debug overlay.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -30,11 +32,19 @@ struct SkeletonRenderOptions {
   glm::vec4 clear_color{0.62f, 0.70f, 0.80f, 1.0f};
   glm::vec3 bone_color{0.92f, 0.86f, 0.74f};
   glm::vec3 joint_color{0.80f, 0.25f, 0.20f};
+  glm::vec3 ground_color{0.50f, 0.52f, 0.49f};
 };
+
+// The per-instance transform of one bone: maps the unit bone mesh (radius 1 about the segment (0,0,0)-(0,1,0))
+// onto the segment a -> b with the given radius. Columns 0 and 2 are orthogonal to b - a with length `radius`,
+// column 1 is b - a, column 3 is a; the determinant is positive so winding (and back-face culling) survives.
+// nullopt for a zero-length or non-finite bone, which the renderer skips (its joint sphere still shows).
+std::optional<glm::mat4> bone_transform(const glm::vec3& a, const glm::vec3& b, float radius);
 
 class SkeletonRenderer {
  public:
-  // Needs a current GL 4.5 core context. Throws std::runtime_error on shader/FBO failure.
+  // Needs a current GL 4.5 core context. Throws std::runtime_error on shader/FBO failure, std::invalid_argument
+  // for a non-positive size (as do resize and, for too few joint positions, render).
   SkeletonRenderer(int width, int height, SkeletonRenderOptions options = {});
   ~SkeletonRenderer();
   SkeletonRenderer(const SkeletonRenderer&) = delete;

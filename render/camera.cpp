@@ -1,0 +1,65 @@
+// Orbit camera. Convention (right-handed, +Y up, matching glm::lookAt / glm::perspective with depth -1..1):
+//   eye = target + distance * (cos(pitch) * sin(yaw), sin(pitch), cos(pitch) * cos(yaw))
+// so yaw 0, pitch 0 puts the eye on the +Z side of the target looking towards -Z, positive yaw swings the eye
+// towards +X (a right-handed turn about +Y), positive pitch lifts it above the target. The up vector is +Y;
+// pitch stays within (-1.5, 1.5) so the view direction never becomes parallel to it.
+#include "render/camera.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace strata {
+
+namespace {
+constexpr float kPitchLimit = 1.5f;
+constexpr float kPi = 3.14159265358979f;
+
+float clamped_pitch(float pitch) { return std::clamp(pitch, -kPitchLimit, kPitchLimit); }
+}  // namespace
+
+glm::vec3 OrbitCamera::eye() const {
+  const float p = clamped_pitch(pitch);
+  const glm::vec3 offset{std::cos(p) * std::sin(yaw), std::sin(p), std::cos(p) * std::cos(yaw)};
+  return target + distance * offset;
+}
+
+glm::mat4 OrbitCamera::view() const { return glm::lookAt(eye(), target, glm::vec3{0.0f, 1.0f, 0.0f}); }
+
+glm::mat4 OrbitCamera::projection(float aspect) const {
+  return glm::perspective(fov_y, aspect > 0.0f ? aspect : 1.0f, near_plane, far_plane);
+}
+
+void OrbitCamera::frame_box(const glm::vec3& box_min, const glm::vec3& box_max, float aspect) {
+  // Fitting the bounding sphere rather than the eight corners keeps the framing independent of yaw and pitch,
+  // so orbiting a framed crowd never clips it; the price is some empty border for flat boxes.
+  target = 0.5f * (box_min + box_max);
+  const float radius = std::max(0.5f * glm::length(box_max - box_min), 1e-3f);
+  const float half_v = 0.5f * fov_y;
+  const float half_h = std::atan(std::tan(half_v) * (aspect > 0.0f ? aspect : 1.0f));
+  // A sphere of radius r seen from distance d subtends asin(r / d) each side of the axis.
+  distance = radius / std::sin(std::min(half_v, half_h));
+  far_plane = std::max(far_plane, distance + 2.0f * radius);
+}
+
+void OrbitCamera::orbit(float dx_pixels, float dy_pixels, float viewport_height) {
+  const float radians_per_pixel = kPi / std::max(viewport_height, 1.0f);
+  yaw -= dx_pixels * radians_per_pixel;
+  pitch = clamped_pitch(pitch + dy_pixels * radians_per_pixel);
+}
+
+void OrbitCamera::pan(float dx_pixels, float dy_pixels, float viewport_height) {
+  const glm::mat4 v = view();
+  const glm::vec3 right{v[0][0], v[1][0], v[2][0]};
+  const glm::vec3 up{v[0][1], v[1][1], v[2][1]};
+  const float metres_per_pixel = 2.0f * distance * std::tan(0.5f * fov_y) / std::max(viewport_height, 1.0f);
+  target += metres_per_pixel * (-dx_pixels * right + dy_pixels * up);
+}
+
+void OrbitCamera::zoom(float wheel_steps) {
+  distance = std::clamp(distance * std::pow(0.85f, wheel_steps), 1e-2f, 1e5f);
+}
+
+}  // namespace strata

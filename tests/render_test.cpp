@@ -1,0 +1,608 @@
+// Rendering tests on a real headless context (EGL surfaceless, llvmpipe in CI): no mocks. Instead of golden
+// images, which would pin the exact Mesa build, the tests check geometry: lit pixels must fall where the camera
+// maths says the skeleton projects to, and must be there at all.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/vec4.hpp>
+
+#include "components/skeleton.h"
+#include "io/image_writer.h"
+#include "render/camera.h"
+#include "render/gl_context.h"
+#include "render/gl_context_glfw.h"
+#include "render/skeleton_renderer.h"
+
+namespace strata {
+namespace {
+
+constexpr int kWidth = 320;
+constexpr int kHeight = 240;
+constexpr float kAspect = static_cast<float>(kWidth) / kHeight;
+
+// A 14-joint stick figure, about 1.75 m tall, standing at the origin facing +Z.
+Skeleton make_stick_figure() {
+  struct J {
+    const char* name;
+    int parent;
+    glm::vec3 at;
+  };
+  const J joints[] = {
+      {"HumanoidRoot", -1, {0.0f, 1.0f, 0.0f}},      {"chest", 0, {0.0f, 1.35f, 0.0f}},
+      {"neck", 1, {0.0f, 1.55f, 0.0f}},              {"skull_top", 2, {0.0f, 1.75f, 0.02f}},
+      {"l_shoulder", 1, {0.18f, 1.5f, 0.0f}},        {"l_elbow", 4, {0.26f, 1.25f, 0.02f}},
+      {"l_wrist", 5, {0.3f, 1.02f, 0.06f}},          {"r_shoulder", 1, {-0.18f, 1.5f, 0.0f}},
+      {"r_elbow", 7, {-0.26f, 1.25f, -0.02f}},       {"r_wrist", 8, {-0.3f, 1.02f, -0.04f}},
+      {"l_hip", 0, {0.1f, 0.95f, 0.0f}},             {"l_knee", 10, {0.11f, 0.5f, 0.04f}},
+      {"l_ankle", 11, {0.12f, 0.06f, 0.0f}},         {"r_hip", 0, {-0.1f, 0.95f, 0.0f}},
+  };
+  Skeleton s;
+  s.name = "stick";
+  for (const J& j : joints) {
+    s.joint_names.push_back(j.name);
+    s.source_joint_names.push_back(j.name);
+    s.parents.push_back(j.parent);
+    s.centers.push_back(j.at);
+  }
+  s.limits.resize(s.joint_count());
+  s.stiffness.assign(s.joint_count(), glm::vec3{1.0f});
+  return s;
+}
+
+std::vector<glm::vec3> translated(const std::vector<glm::vec3>& points, const glm::vec3& offset) {
+  std::vector<glm::vec3> out;
+  for (const glm::vec3& p : points) out.push_back(p + offset);
+  return out;
+}
+
+struct Pixel {
+  float x, y, w;  // pixel coordinates (origin top-left, y down) and clip w (depth along the view axis)
+};
+
+Pixel project(const glm::vec3& p, const glm::mat4& view, const glm::mat4& projection) {
+  const glm::vec4 clip = projection * view * glm::vec4(p, 1.0f);
+  const glm::vec3 ndc = glm::vec3(clip) / clip.w;
+  return {(ndc.x * 0.5f + 0.5f) * kWidth, (0.5f - ndc.y * 0.5f) * kHeight, clip.w};
+}
+
+struct Rect {
+  float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+  bool contains_pixel(int x, int y) const {
+    const float cx = static_cast<float>(x) + 0.5f, cy = static_cast<float>(y) + 0.5f;
+    return cx >= x0 && cx <= x1 && cy >= y0 && cy <= y1;
+  }
+  bool overlaps(const Rect& o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
+};
+
+// Bounding rectangle of the projected joints, grown by a conservative pixel margin for the geometry's radius.
+// All geometry lies within R = max(bone, joint radius) of the joint-to-joint segments, and the projection of a
+// segment lies inside the rectangle of its projected ends. A sphere of radius R at view depth z covers at most
+// f * R / (z - R) pixels on the axis (f = focal length in pixels); off-axis it stretches by 1 / cos^2 of the
+// angle, under 1.3 in these views, so twice that plus 2 pixels of rasterisation/MSAA coverage is safe.
+Rect projected_bounds(const std::vector<glm::vec3>& joints, const glm::mat4& view, const glm::mat4& projection,
+                      const SkeletonRenderOptions& options) {
+  const float radius = std::max(options.bone_radius, options.joint_radius);
+  const float focal_pixels = projection[1][1] * 0.5f * kHeight;
+  Rect r;
+  float margin = 0.0f;
+  for (const glm::vec3& j : joints) {
+    const Pixel p = project(j, view, projection);
+    EXPECT_GT(p.w, radius) << "test setup: joint behind the near side of the camera";
+    r.x0 = std::min(r.x0, p.x);
+    r.x1 = std::max(r.x1, p.x);
+    r.y0 = std::min(r.y0, p.y);
+    r.y1 = std::max(r.y1, p.y);
+    margin = std::max(margin, 2.0f * focal_pixels * radius / (p.w - radius) + 2.0f);
+  }
+  r.x0 -= margin;
+  r.y0 -= margin;
+  r.x1 += margin;
+  r.y1 += margin;
+  return r;
+}
+
+using Rgba = std::array<std::uint8_t, 4>;
+
+Rgba pixel_at(const std::vector<std::uint8_t>& image, int x, int y) {
+  const std::size_t i = (static_cast<std::size_t>(y) * kWidth + static_cast<std::size_t>(x)) * 4;
+  return {image[i], image[i + 1], image[i + 2], image[i + 3]};
+}
+
+class RenderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    try {
+      context_ = create_headless_gl_context();
+    } catch (const std::exception& e) {
+      FAIL() << "headless GL context unavailable (CI has Mesa, so this is a failure): " << e.what();
+    }
+    options_.draw_ground = false;
+    renderer_ = std::make_unique<SkeletonRenderer>(kWidth, kHeight, options_);
+    background_ = render_background();
+  }
+
+  void TearDown() override {
+    renderer_.reset();  // needs the context current
+    context_.reset();
+  }
+
+  // The clear colour as the framebuffer stores it, read from an empty frame (no assumption about rounding).
+  Rgba render_background() {
+    std::vector<std::uint8_t> image = render({}, 0, OrbitCamera{});
+    const Rgba first = pixel_at(image, 0, 0);
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x)
+        if (pixel_at(image, x, y) != first) {
+          ADD_FAILURE() << "empty frame is not uniform at " << x << "," << y;
+          return first;
+        }
+    return first;
+  }
+
+  std::vector<std::uint8_t> render(const std::vector<glm::vec3>& positions, std::size_t walkers,
+                                   const OrbitCamera& camera) {
+    SkeletonDrawInput input;
+    input.skeleton = &skeleton_;
+    input.joint_positions = positions;
+    input.walker_count = walkers;
+    renderer_->render(input, camera.view(), camera.projection(kAspect));
+    std::vector<std::uint8_t> image;
+    renderer_->read_rgba(image);
+    return image;
+  }
+
+  bool is_background(const std::vector<std::uint8_t>& image, int x, int y) const {
+    return pixel_at(image, x, y) == background_;
+  }
+
+  // Renders one figure and checks the three properties of the brief: every lit pixel inside the projected
+  // bounds, plenty of lit pixels, and lit pixels on the middle of two bones.
+  void check_single_figure(const std::vector<glm::vec3>& joints, const OrbitCamera& camera) {
+    const std::vector<std::uint8_t> image = render(joints, 1, camera);
+    const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
+    const Rect bounds = projected_bounds(joints, view, projection, options_);
+    int inside = 0, outside = 0;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        if (is_background(image, x, y)) continue;
+        if (bounds.contains_pixel(x, y))
+          ++inside;
+        else if (++outside <= 3)
+          ADD_FAILURE() << "lit pixel at " << x << "," << y << " outside [" << bounds.x0 << "," << bounds.x1
+                        << "]x[" << bounds.y0 << "," << bounds.y1 << "]";
+      }
+    EXPECT_EQ(outside, 0);
+    EXPECT_GT(inside, 200);
+    // Spine (root -> chest) and left thigh (hip -> knee), both about 0.4 m long.
+    for (auto [a, b] : {std::pair{0, 1}, std::pair{10, 11}}) {
+      const Pixel mid = project(0.5f * (joints[a] + joints[b]), view, projection);
+      const int x = static_cast<int>(std::floor(mid.x)), y = static_cast<int>(std::floor(mid.y));
+      ASSERT_TRUE(x >= 0 && x < kWidth && y >= 0 && y < kHeight) << "test setup: bone midpoint off screen";
+      EXPECT_FALSE(is_background(image, x, y)) << "bone " << a << "->" << b << " midpoint pixel " << x << ","
+                                               << y << " shows the clear colour";
+    }
+  }
+
+  std::unique_ptr<GlContext> context_;
+  SkeletonRenderOptions options_;
+  std::unique_ptr<SkeletonRenderer> renderer_;
+  Skeleton skeleton_ = make_stick_figure();
+  Rgba background_{};
+};
+
+OrbitCamera figure_camera() {
+  OrbitCamera camera;
+  camera.target = {0.0f, 0.9f, 0.0f};
+  camera.distance = 3.0f;
+  camera.yaw = 0.6f;
+  camera.pitch = 0.25f;
+  return camera;
+}
+
+TEST_F(RenderTest, ContextIsGl45CoreWithARenderer) {
+  EXPECT_FALSE(context_->renderer().empty());
+  const std::string version = context_->version();
+  int major = 0, minor = 0;
+  ASSERT_EQ(std::sscanf(version.c_str(), "%d.%d", &major, &minor), 2) << version;
+  EXPECT_TRUE(major > 4 || (major == 4 && minor >= 5)) << version;
+}
+
+TEST_F(RenderTest, BackgroundIsTheClearColour) {
+  for (int c = 0; c < 4; ++c)
+    EXPECT_NEAR(background_[static_cast<std::size_t>(c)], options_.clear_color[c] * 255.0f, 1.0f) << "channel " << c;
+}
+
+TEST_F(RenderTest, FigurePixelsLieInsideProjectedBounds) {
+  check_single_figure(skeleton_.centers, figure_camera());
+}
+
+TEST_F(RenderTest, FigurePixelsLieInsideProjectedBoundsFromBehindAndAbove) {
+  OrbitCamera camera = figure_camera();
+  camera.yaw = -2.3f;
+  camera.pitch = 0.7f;
+  camera.distance = 3.4f;
+  check_single_figure(skeleton_.centers, camera);
+}
+
+TEST_F(RenderTest, OffCentreFigureIsDrawnWhereItProjects) {
+  const OrbitCamera camera = figure_camera();
+  const std::vector<glm::vec3> joints = translated(skeleton_.centers, {0.9f, 0.0f, -0.5f});
+  const Rect bounds = projected_bounds(joints, camera.view(), camera.projection(kAspect), options_);
+  // The check below only proves the projection is used if the figure is clearly away from the centre.
+  ASSERT_GT(std::abs(0.5f * (bounds.x0 + bounds.x1) - 0.5f * kWidth), 30.0f);
+  check_single_figure(joints, camera);
+}
+
+TEST_F(RenderTest, GridOfWalkersEachDrawnInItsOwnBox) {
+  constexpr int kSide = 3;
+  constexpr float kSpacing = 2.0f;
+  std::vector<glm::vec3> positions;
+  std::vector<std::vector<glm::vec3>> walkers;
+  for (int row = 0; row < kSide; ++row)
+    for (int col = 0; col < kSide; ++col) {
+      const glm::vec3 offset{(static_cast<float>(col) - 1.0f) * kSpacing, 0.0f,
+                             (static_cast<float>(row) - 1.0f) * kSpacing};
+      walkers.push_back(translated(skeleton_.centers, offset));
+      positions.insert(positions.end(), walkers.back().begin(), walkers.back().end());
+    }
+  glm::vec3 lo{1e9f}, hi{-1e9f};
+  for (const glm::vec3& p : positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  OrbitCamera camera;
+  camera.yaw = 0.25f;
+  camera.pitch = 1.0f;  // high enough that the rows do not hide each other
+  camera.frame_box(lo, hi, kAspect);
+
+  const std::vector<std::uint8_t> image = render(positions, walkers.size(), camera);
+  std::vector<Rect> boxes;
+  for (const auto& w : walkers)
+    boxes.push_back(projected_bounds(w, camera.view(), camera.projection(kAspect), options_));
+  // Disjoint boxes make "pixels in each box" mean "each walker was drawn", not "a neighbour overlaps".
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    EXPECT_TRUE(boxes[i].x0 >= 0.0f && boxes[i].y0 >= 0.0f && boxes[i].x1 <= kWidth && boxes[i].y1 <= kHeight)
+        << "frame_box left walker " << i << " partly out of view";
+    for (std::size_t j = i + 1; j < boxes.size(); ++j)
+      ASSERT_FALSE(boxes[i].overlaps(boxes[j])) << "test setup: boxes " << i << " and " << j << " overlap";
+  }
+
+  std::vector<int> lit(boxes.size(), 0);
+  int outside = 0;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      if (is_background(image, x, y)) continue;
+      bool in_any = false;
+      for (std::size_t i = 0; i < boxes.size(); ++i)
+        if (boxes[i].contains_pixel(x, y)) {
+          ++lit[i];
+          in_any = true;
+        }
+      if (!in_any) ++outside;
+    }
+  EXPECT_EQ(outside, 0);
+  for (std::size_t i = 0; i < lit.size(); ++i) EXPECT_GT(lit[i], 80) << "walker " << i;
+}
+
+TEST_F(RenderTest, SameInputGivesIdenticalPixels) {
+  const OrbitCamera camera = figure_camera();
+  renderer_->options().draw_ground = true;  // include the grid shader's derivatives
+  const std::vector<std::uint8_t> first = render(skeleton_.centers, 1, camera);
+  const std::vector<glm::vec3> other = translated(skeleton_.centers, {0.3f, 0.0f, 0.0f});
+  render(other, 1, camera);  // something different in between
+  const std::vector<std::uint8_t> second = render(skeleton_.centers, 1, camera);
+  EXPECT_TRUE(first == second);
+
+  SkeletonRenderOptions options = options_;
+  options.draw_ground = true;
+  SkeletonRenderer fresh(kWidth, kHeight, options);
+  SkeletonDrawInput input{&skeleton_, skeleton_.centers, 1};
+  fresh.render(input, camera.view(), camera.projection(kAspect));
+  std::vector<std::uint8_t> third;
+  fresh.read_rgba(third);
+  EXPECT_TRUE(first == third);
+}
+
+TEST_F(RenderTest, GroundFillsTheLowerHalf) {
+  renderer_->options().draw_ground = true;
+  const std::vector<std::uint8_t> image = render({}, 0, figure_camera());
+  // The camera looks down on the plane y = 0 below its target: the bottom row is ground, the top row sky.
+  EXPECT_TRUE(is_background(image, kWidth / 2, 0));
+  EXPECT_FALSE(is_background(image, kWidth / 2, kHeight - 1));
+}
+
+TEST_F(RenderTest, CoincidentJointAddsNothingAndBreaksNothing) {
+  // A zero-length bone (child on top of its parent) must not produce NaN geometry: the frame must be exactly
+  // the frame without that joint.
+  const OrbitCamera camera = figure_camera();
+  const std::vector<std::uint8_t> reference = render(skeleton_.centers, 1, camera);
+  Skeleton with_extra = skeleton_;
+  with_extra.joint_names.push_back("l_ankle_copy");
+  with_extra.source_joint_names.push_back("l_ankle_copy");
+  with_extra.parents.push_back(12);
+  with_extra.centers.push_back(skeleton_.centers[12]);
+  SkeletonDrawInput input{&with_extra, with_extra.centers, 1};
+  renderer_->render(input, camera.view(), camera.projection(kAspect));
+  std::vector<std::uint8_t> image;
+  renderer_->read_rgba(image);
+  EXPECT_TRUE(image == reference);
+}
+
+TEST_F(RenderTest, RejectsTooFewJointPositions) {
+  std::vector<glm::vec3> positions = skeleton_.centers;
+  SkeletonDrawInput input{&skeleton_, positions, 2};
+  const OrbitCamera camera;
+  EXPECT_THROW(renderer_->render(input, camera.view(), camera.projection(kAspect)), std::invalid_argument);
+}
+
+TEST_F(RenderTest, ResizeChangesTheImageSize) {
+  renderer_->resize(64, 32);
+  EXPECT_EQ(renderer_->width(), 64);
+  EXPECT_EQ(renderer_->height(), 32);
+  SkeletonDrawInput input{&skeleton_, skeleton_.centers, 1};
+  const OrbitCamera camera = figure_camera();
+  renderer_->render(input, camera.view(), camera.projection(2.0f));
+  std::vector<std::uint8_t> image;
+  renderer_->read_rgba(image);
+  EXPECT_EQ(image.size(), 64u * 32u * 4u);
+}
+
+// ---- bone_transform ---------------------------------------------------------------------------------------
+
+TEST(BoneTransform, MapsTheUnitBoneOntoTheSegmentWithAnOrthogonalRightHandedBasis) {
+  const glm::vec3 a{0.3f, 1.2f, -0.4f};
+  const float radius = 0.05f;
+  // Axis-aligned directions hit any fixed helper axis; the others are generic.
+  const glm::vec3 directions[] = {{0, 1, 0},  {0, -1, 0},       {1, 0, 0},          {0, 0, -1},
+                                  {1, 1, 1},  {-0.2f, 0.9f, 0.1f}, {0.7f, -0.1f, -0.7f}, {1e-4f, 1.0f, -1e-4f}};
+  for (const glm::vec3& dir : directions) {
+    const glm::vec3 b = a + 0.37f * glm::normalize(dir);
+    const auto m = bone_transform(a, b, radius);
+    ASSERT_TRUE(m.has_value());
+    const glm::vec3 start = glm::vec3(*m * glm::vec4(0, 0, 0, 1));
+    const glm::vec3 end = glm::vec3(*m * glm::vec4(0, 1, 0, 1));
+    EXPECT_LT(glm::length(start - a), 1e-6f);
+    EXPECT_LT(glm::length(end - b), 1e-5f);
+    const glm::vec3 c0{(*m)[0]}, c1{(*m)[1]}, c2{(*m)[2]};
+    EXPECT_NEAR(glm::length(c0), radius, 1e-6f);
+    EXPECT_NEAR(glm::length(c2), radius, 1e-6f);
+    EXPECT_NEAR(glm::dot(c0, c1), 0.0f, 1e-6f);
+    EXPECT_NEAR(glm::dot(c1, c2), 0.0f, 1e-6f);
+    EXPECT_NEAR(glm::dot(c0, c2), 0.0f, 1e-6f);
+    EXPECT_GT(glm::dot(c0, glm::cross(c1, c2)), 0.0f) << "left-handed basis flips the winding";
+    for (int i = 0; i < 4; ++i)
+      for (int k = 0; k < 4; ++k) EXPECT_TRUE(std::isfinite((*m)[i][k]));
+  }
+}
+
+TEST(BoneTransform, RejectsZeroLengthAndNonFiniteBones) {
+  const glm::vec3 a{1.0f, 2.0f, 3.0f};
+  EXPECT_FALSE(bone_transform(a, a, 0.02f).has_value());
+  EXPECT_FALSE(bone_transform(a, glm::vec3{NAN, 0.0f, 0.0f}, 0.02f).has_value());
+  EXPECT_FALSE(bone_transform(glm::vec3{INFINITY, 0.0f, 0.0f}, a, 0.02f).has_value());
+}
+
+// ---- camera ---------------------------------------------------------------------------------------------
+
+TEST(OrbitCamera, YawZeroLooksAlongMinusZAndPositiveYawSwingsTowardsPlusX) {
+  OrbitCamera camera;
+  camera.target = {1.0f, 2.0f, 3.0f};
+  camera.distance = 5.0f;
+  camera.yaw = 0.0f;
+  camera.pitch = 0.0f;
+  EXPECT_LT(glm::length(camera.eye() - glm::vec3{1.0f, 2.0f, 8.0f}), 1e-5f);
+  const glm::vec4 target_in_view = camera.view() * glm::vec4(camera.target, 1.0f);
+  EXPECT_LT(glm::length(glm::vec3(target_in_view) - glm::vec3{0.0f, 0.0f, -5.0f}), 1e-5f);
+  camera.yaw = 1.5707963f;
+  EXPECT_LT(glm::length(camera.eye() - glm::vec3{6.0f, 2.0f, 3.0f}), 1e-5f);
+  camera.yaw = 0.0f;
+  camera.pitch = 0.5f;
+  EXPECT_NEAR(camera.eye().y, 2.0f + 5.0f * std::sin(0.5f), 1e-5f);
+}
+
+TEST(OrbitCamera, FrameBoxFitsTheBoundingSphereInBothFieldsOfView) {
+  const glm::vec3 lo{-4.0f, 0.0f, -2.0f}, hi{6.0f, 1.8f, 3.0f};
+  const glm::vec3 center = 0.5f * (lo + hi);
+  const float radius = 0.5f * glm::length(hi - lo);
+  for (float aspect : {0.5f, 1.0f, 4.0f / 3.0f, 2.5f})
+    for (float yaw : {0.0f, 0.7f, -2.0f})
+      for (float pitch : {0.1f, 0.6f, 1.2f}) {
+        OrbitCamera camera;
+        camera.yaw = yaw;
+        camera.pitch = pitch;
+        camera.frame_box(lo, hi, aspect);
+        const glm::mat4 vp = camera.projection(aspect) * camera.view();
+        // Points spread over the bounding sphere (Fibonacci lattice): all must be in view, and the sphere must
+        // touch the edge of the narrower field of view (x when the image is taller than wide, y otherwise).
+        float reach = 0.0f;
+        constexpr int kSamples = 4000;
+        for (int i = 0; i < kSamples; ++i) {
+          const float y = 1.0f - 2.0f * (static_cast<float>(i) + 0.5f) / kSamples;
+          const float ring = std::sqrt(1.0f - y * y), phi = 2.39996323f * static_cast<float>(i);
+          const glm::vec3 p = center + radius * glm::vec3{ring * std::cos(phi), y, ring * std::sin(phi)};
+          const glm::vec4 clip = vp * glm::vec4(p, 1.0f);
+          ASSERT_GT(clip.w, 0.0f);
+          const glm::vec3 ndc = glm::vec3(clip) / clip.w;
+          ASSERT_LE(std::abs(ndc.x), 1.0f + 1e-4f) << aspect << " " << yaw << " " << pitch;
+          ASSERT_LE(std::abs(ndc.y), 1.0f + 1e-4f) << aspect << " " << yaw << " " << pitch;
+          ASSERT_GT(ndc.z, -1.0f);
+          ASSERT_LT(ndc.z, 1.0f);
+          reach = std::max(reach, aspect < 1.0f ? std::abs(ndc.x) : std::abs(ndc.y));
+        }
+        EXPECT_GT(reach, 0.98f) << "sphere framed loosely: " << aspect << " " << yaw << " " << pitch;
+      }
+}
+
+TEST(OrbitCamera, PanKeepsThePointUnderTheCursor) {
+  OrbitCamera camera;
+  const float height = 600.0f, aspect = 1.5f, width = height * aspect;
+  const glm::vec3 anchor = camera.target;
+  camera.pan(40.0f, -25.0f, height);
+  const glm::vec4 clip = camera.projection(aspect) * camera.view() * glm::vec4(anchor, 1.0f);
+  const float x = (clip.x / clip.w * 0.5f + 0.5f) * width;
+  const float y = (0.5f - clip.y / clip.w * 0.5f) * height;
+  EXPECT_NEAR(x, 0.5f * width + 40.0f, 0.05f);
+  EXPECT_NEAR(y, 0.5f * height - 25.0f, 0.05f);
+}
+
+TEST(OrbitCamera, OrbitDragsAndZoom) {
+  OrbitCamera camera;
+  camera.yaw = 0.0f;
+  camera.pitch = 0.0f;
+  camera.orbit(150.0f, 0.0f, 300.0f);  // half the height to the right: a quarter turn, eye to -X
+  EXPECT_NEAR(camera.eye().x - camera.target.x, -camera.distance, 1e-4f);
+  camera.orbit(0.0f, 1e4f, 300.0f);  // far down: the pitch clamps below the pole
+  EXPECT_NEAR(camera.pitch, 1.5f, 1e-6f);
+  const float before = camera.distance;
+  camera.zoom(2.0f);
+  EXPECT_LT(camera.distance, before);
+  camera.zoom(-2.0f);
+  EXPECT_NEAR(camera.distance, before, 1e-4f);
+}
+
+TEST(WindowInput, AppliesDragsAndScrollToTheCamera) {
+  OrbitCamera camera, reference;
+  apply_camera_input(WindowInput{}, 500.0f, camera);
+  EXPECT_EQ(camera.yaw, reference.yaw);
+  EXPECT_EQ(camera.distance, reference.distance);
+  WindowInput input;
+  input.orbit_drag = {10.0f, 0.0f};
+  input.scroll = 1.0f;
+  apply_camera_input(input, 500.0f, camera);
+  reference.orbit(10.0f, 0.0f, 500.0f);
+  reference.zoom(1.0f);
+  EXPECT_FLOAT_EQ(camera.yaw, reference.yaw);
+  EXPECT_FLOAT_EQ(camera.distance, reference.distance);
+}
+
+// Needs an X display (xvfb-run -a); skipped otherwise because GLFW 3.3 has no headless platform.
+TEST(GlfwWindow, HiddenWindowRendersAndBlits) {
+  if (std::getenv("DISPLAY") == nullptr) GTEST_SKIP() << "no DISPLAY";
+  WindowOptions options;
+  options.width = 160;
+  options.height = 120;
+  options.visible = false;
+  GlfwWindow window(options);
+  const std::string version = window.version();
+  int major = 0, minor = 0;
+  ASSERT_EQ(std::sscanf(version.c_str(), "%d.%d", &major, &minor), 2) << version;
+  EXPECT_TRUE(major > 4 || (major == 4 && minor >= 5)) << version;
+  const glm::ivec2 fb = window.framebuffer_size();
+  ASSERT_GT(fb.x, 0);
+  SkeletonRenderer renderer(fb.x, fb.y);
+  const Skeleton skeleton = make_stick_figure();
+  SkeletonDrawInput input{&skeleton, skeleton.centers, 1};
+  const OrbitCamera camera = figure_camera();
+  renderer.render(input, camera.view(), camera.projection(static_cast<float>(fb.x) / fb.y));
+  renderer.blit_to_default_framebuffer(fb.x, fb.y);
+  window.swap_buffers();
+  const WindowInput events = window.poll_events();
+  EXPECT_FALSE(events.quit);
+  window.request_close();
+  EXPECT_TRUE(window.should_close());
+}
+
+// ---- PNG writing ------------------------------------------------------------------------------------------
+
+class PngTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("strata_render_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  static std::vector<std::uint8_t> read_bytes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
+  static std::uint32_t big_endian(const std::vector<std::uint8_t>& b, std::size_t at) {
+    return (std::uint32_t{b[at]} << 24) | (std::uint32_t{b[at + 1]} << 16) | (std::uint32_t{b[at + 2]} << 8) |
+           std::uint32_t{b[at + 3]};
+  }
+
+  std::filesystem::path dir_;
+};
+
+TEST_F(PngTest, WritesAValidPngHeaderForRgbaAndRgb) {
+  const int width = 37, height = 21;  // odd sizes catch stride mistakes in the header
+  for (int channels : {4, 3}) {
+    std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width * height * channels));
+    for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<std::uint8_t>(i * 7);
+    const std::filesystem::path path = dir_ / ("image" + std::to_string(channels) + ".png");
+    write_image(path, width, height, channels, pixels);
+    const std::vector<std::uint8_t> bytes = read_bytes(path);
+    ASSERT_GE(bytes.size(), 33u);
+    const std::uint8_t signature[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    for (std::size_t i = 0; i < 8; ++i) EXPECT_EQ(bytes[i], signature[i]) << "signature byte " << i;
+    EXPECT_EQ(big_endian(bytes, 8), 13u);  // IHDR length
+    EXPECT_EQ(std::string(bytes.begin() + 12, bytes.begin() + 16), "IHDR");
+    EXPECT_EQ(big_endian(bytes, 16), static_cast<std::uint32_t>(width));
+    EXPECT_EQ(big_endian(bytes, 20), static_cast<std::uint32_t>(height));
+    EXPECT_EQ(bytes[24], 8);                         // bit depth
+    EXPECT_EQ(bytes[25], channels == 4 ? 6 : 2);     // colour type: RGBA / RGB
+  }
+}
+
+TEST_F(PngTest, WritesARenderedFrame) {
+  std::unique_ptr<GlContext> context;
+  try {
+    context = create_headless_gl_context();
+  } catch (const std::exception& e) {
+    FAIL() << e.what();
+  }
+  SkeletonRenderer renderer(kWidth, kHeight);
+  const Skeleton skeleton = make_stick_figure();
+  const OrbitCamera camera = figure_camera();
+  renderer.render({&skeleton, skeleton.centers, 1}, camera.view(), camera.projection(kAspect));
+  std::vector<std::uint8_t> pixels;
+  renderer.read_rgba(pixels);
+  const std::filesystem::path path = dir_ / "frame.png";
+  write_image(path, kWidth, kHeight, 4, pixels);
+  const std::vector<std::uint8_t> bytes = read_bytes(path);
+  ASSERT_GE(bytes.size(), 33u);
+  EXPECT_EQ(big_endian(bytes, 16), static_cast<std::uint32_t>(kWidth));
+  EXPECT_EQ(big_endian(bytes, 20), static_cast<std::uint32_t>(kHeight));
+}
+
+TEST_F(PngTest, MissingDirectoryIsAnErrorNamingThePath) {
+  const std::filesystem::path path = dir_ / "no_such_dir" / "frame.png";
+  const std::vector<std::uint8_t> pixels(4 * 4 * 4, 0);
+  try {
+    write_image(path, 4, 4, 4, pixels);
+    FAIL() << "expected an exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+TEST_F(PngTest, RejectsAPixelBufferOfTheWrongSize) {
+  const std::filesystem::path path = dir_ / "short.png";
+  const std::vector<std::uint8_t> pixels(4 * 4 * 3, 0);
+  EXPECT_THROW(write_image(path, 4, 4, 4, pixels), std::runtime_error);
+  EXPECT_THROW(write_image(path, 4, 4, 2, pixels), std::runtime_error);
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+}  // namespace
+}  // namespace strata
