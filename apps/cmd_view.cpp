@@ -157,7 +157,7 @@ void add_view_command(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("view", "Open the crowd in a window with an orbit camera (needs a display)");
   cmd->add_option("--walkers,-n", o->walkers, "Number of walkers")->capture_default_str();
   cmd->add_option("--skeleton", o->skeleton, "H-Anim file (X3D or paper XML); default: the shipped skeleton");
-  cmd->add_option("--clip", o->clip, "Animation clip by name or index (default: the first)");
+  cmd->add_option("--clip", o->clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
   cmd->add_flag("--rest", o->rest, "Hold the rest pose");
   cmd->add_option("--seed", o->seed, "Seed for per-walker variation")->capture_default_str();
   cmd->add_option("--width", o->width, "Window width")->capture_default_str();

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "io/hanim_loader.h"
+#include "systems/animation_sample.h"
 
 namespace strata::cli {
 
@@ -17,8 +18,12 @@ Rig load_rig(const std::string& skeleton_path) {
 }
 
 int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
-  if (rest) return -1;
-  if (clip.empty()) return rig.clips.empty() ? -1 : 0;
+  if (rest || rig.clips.empty()) {
+    if (!rest && !clip.empty() && clip != "all")
+      throw std::invalid_argument("no clip '" + clip + "' in " + rig.skeleton.source + " (it has no animation)");
+    return kRestPose;
+  }
+  if (clip.empty() || clip == "all") return kAllClips;
   for (std::size_t i = 0; i < rig.clips.size(); ++i)
     if (rig.clips[i].name == clip) return static_cast<int>(i);
   int index = -1;

@@ -44,6 +44,31 @@ void OrbitCamera::frame_box(const glm::vec3& box_min, const glm::vec3& box_max, 
   far_plane = std::max(far_plane, distance + 2.0f * radius);
 }
 
+void OrbitCamera::frame_box_tight(const glm::vec3& box_min, const glm::vec3& box_max, float aspect, float margin) {
+  target = 0.5f * (box_min + box_max);
+  const float tan_v = std::tan(0.5f * fov_y);
+  const float tan_h = tan_v * (aspect > 0.0f ? aspect : 1.0f);
+  // Camera basis at the current yaw/pitch; the eye sits at target - forward * distance.
+  const glm::vec3 offset = eye() - target;
+  const glm::vec3 forward = -glm::normalize(offset);
+  const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(0.0f, 1.0f, 0.0f)));
+  const glm::vec3 up = glm::cross(right, forward);
+  // A corner at (x, y, z) in that basis relative to the target has depth distance + z and stays in view while
+  // |x| <= (distance + z) tan_h and |y| <= (distance + z) tan_v: each corner gives a lower bound on distance.
+  float needed = 1e-3f;
+  for (int i = 0; i < 8; ++i) {
+    const glm::vec3 corner{(i & 1) ? box_max.x : box_min.x, (i & 2) ? box_max.y : box_min.y,
+                           (i & 4) ? box_max.z : box_min.z};
+    const glm::vec3 d = corner - target;
+    const float x = glm::dot(d, right), y = glm::dot(d, up), z = glm::dot(d, forward);
+    needed = std::max({needed, margin * std::abs(x) / tan_h - z, margin * std::abs(y) / tan_v - z});
+  }
+  distance = needed;
+  const float radius = 0.5f * glm::length(box_max - box_min);
+  far_plane = std::max(far_plane, distance + 2.0f * radius);
+  near_plane = std::min(near_plane, std::max(1e-3f, 0.5f * (distance - radius)));
+}
+
 void OrbitCamera::orbit(float dx_pixels, float dy_pixels, float viewport_height) {
   const float radians_per_pixel = kPi / std::max(viewport_height, 1.0f);
   yaw -= dx_pixels * radians_per_pixel;

@@ -21,6 +21,10 @@ struct OrbitCamera {
   // the distance so its bounding sphere just fits the narrower of the vertical and horizontal fields of view
   // (far_plane grows if needed).
   void frame_box(const glm::vec3& box_min, const glm::vec3& box_max, float aspect);
+  // Frames the box's eight corners at the current yaw and pitch as tightly as `margin` allows (1.0 = corners may
+  // touch the image edge). For fixed shots such as `strata crowd`, where frame_box's sphere leaves the crowd
+  // small in a wide frame; unlike frame_box the fit is only valid for this yaw and pitch.
+  void frame_box_tight(const glm::vec3& box_min, const glm::vec3& box_max, float aspect, float margin = 1.08f);
 
   // Interactive controls for `strata view`, in window pixels (y down) so a drag feels the same at any size.
   // orbit: a drag across the full viewport height turns the camera by pi; dragging right moves the camera

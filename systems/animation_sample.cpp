@@ -32,6 +32,10 @@ glm::quat slerp_shortest(glm::quat a, glm::quat b, float u) {
 void sample_clip(const AnimationClip& clip, float time, std::span<glm::quat> rotations, glm::vec3& root_translation) {
   std::fill(rotations.begin(), rotations.end(), glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
   root_translation = glm::vec3(0.0f);
+  apply_clip(clip, time, rotations, root_translation);
+}
+
+void apply_clip(const AnimationClip& clip, float time, std::span<glm::quat> rotations, glm::vec3& root_translation) {
   float t = time;
   if (!std::isfinite(t)) t = 0.0f;
   if (clip.duration > 0.0f) {
@@ -70,14 +74,17 @@ void animation_system(const Rig& rig, const WalkerLanes& lanes, float dt) {
     for (std::size_t i = first; i < last; ++i) {
       time[i] += dt * rate[i];
       glm::vec3 root(0.0f);
-      int c = static_cast<int>(clip_index[i]);
+      std::fill(rotations.begin(), rotations.end(), glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+      const int c = static_cast<int>(clip_index[i]);
       if (c >= 0 && static_cast<std::size_t>(c) < rig.clips.size()) {
         const AnimationClip& clip = rig.clips[c];
         // Keep the clock inside one cycle so float time never loses precision in long runs.
         if (clip.loop && clip.duration > 0.0f && time[i] >= clip.duration) time[i] = std::fmod(time[i], clip.duration);
-        sample_clip(clip, time[i], rotations, root);
-      } else {
-        std::fill(rotations.begin(), rotations.end(), glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+        apply_clip(clip, time[i], rotations, root);
+      } else if (c == kAllClips) {
+        // Clips of different lengths share one clock, so it cannot be wrapped to a common cycle; it is left to
+        // grow (float seconds keep millisecond resolution for about 2 hours of playback).
+        for (const AnimationClip& clip : rig.clips) apply_clip(clip, time[i], rotations, root);
       }
       for (std::size_t j = 0; j < joints; ++j) {
         lanes.local_rotation[(j * 4 + 0) * stride + i] = rotations[j].x;

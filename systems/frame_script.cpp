@@ -46,9 +46,13 @@ void CrowdScene::spawn_grid(const CrowdConfig& config) {
   const std::size_t columns = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(n))));
   const std::size_t rows = columns == 0 ? 0 : (n + columns - 1) / columns;
   walkers().reserve(walkers().size() + n);
+  // Phases spread over one cycle of the clip (the longest one when all clips play), so walkers are out of step.
   float duration = 1.0f;
-  if (config.clip >= 0 && static_cast<std::size_t>(config.clip) < rig().clips.size())
+  if (config.clip >= 0 && static_cast<std::size_t>(config.clip) < rig().clips.size()) {
     duration = std::max(rig().clips[config.clip].duration, 1e-3f);
+  } else if (config.clip == kAllClips) {
+    for (const AnimationClip& c : rig().clips) duration = std::max(duration, c.duration);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const float gx = (static_cast<float>(i % columns) - 0.5f * static_cast<float>(columns - 1)) * config.spacing;
     const float gz = (static_cast<float>(i / columns) - 0.5f * static_cast<float>(rows - 1)) * config.spacing;

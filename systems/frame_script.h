@@ -22,7 +22,7 @@ struct CrowdConfig {
   std::size_t walkers = 25;
   float spacing = 1.25f;     // metres between grid neighbours
   std::uint64_t seed = 1;    // per-walker phase, rate and heading variation
-  int clip = 0;              // rig clip each walker plays; -1 = rest pose
+  int clip = -2;             // clip each walker plays: an index, kAllClips (-2) or kRestPose (-1)
   float rate_jitter = 0.08f; // playback rate drawn in [1 - j, 1 + j]
   float heading_jitter = 0.35f;  // radians either side of facing +Z
 };

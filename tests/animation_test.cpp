@@ -103,5 +103,38 @@ TEST(AnimationSystem, AdvancesEachWalkerByItsRate) {
   EXPECT_EQ(lanes.root_translation[1 * lanes.stride + 2], 0.0f);
 }
 
+TEST(AnimationSystem, AllClipsLayerEachOnItsOwnCycle) {
+  Rig rig;
+  rig.skeleton.joint_names = {"HumanoidRoot", "a", "b"};
+  rig.skeleton.source_joint_names = rig.skeleton.joint_names;
+  rig.skeleton.parents = {-1, 0, 0};
+  rig.skeleton.centers = {{0, 1, 0}, {0.1f, 0.9f, 0}, {-0.1f, 0.9f, 0}};
+  rig.skeleton.limits.resize(3);
+  rig.skeleton.stiffness.assign(3, glm::vec3(1.0f));
+  rig.clips.push_back(swing_clip());  // drives joint 1, 2 s cycle
+  AnimationClip other;
+  other.name = "other";
+  other.duration = 0.5f;
+  RotationTrack r;
+  r.joint = 2;
+  r.times = {0.0f, 0.5f};
+  r.values = {glm::angleAxis(0.0f, glm::vec3(1, 0, 0)), glm::angleAxis(1.0f, glm::vec3(1, 0, 0))};
+  other.rotations.push_back(r);
+  rig.clips.push_back(other);
+  CrowdScene scene(rig);
+  scene.spawn({0, 0, 0}, 0.0f, 0.0f, 1.0f, kAllClips);
+  Profiler profiler;
+  for (int f = 0; f < 7; ++f) scene.simulate(0.1f, profiler);  // 0.7 s: clip 0 at 0.7 s, clip 1 at 0.2 s
+  WalkerLanes lanes = scene.lanes();
+  auto angle = [&](std::size_t j) {
+    glm::quat q(lanes.local_rotation[(j * 4 + 3) * lanes.stride], lanes.local_rotation[(j * 4 + 0) * lanes.stride],
+                lanes.local_rotation[(j * 4 + 1) * lanes.stride], lanes.local_rotation[(j * 4 + 2) * lanes.stride]);
+    return angle_about_x(q);
+  };
+  EXPECT_NEAR(angle(1), 0.56f, 1e-4f);
+  EXPECT_NEAR(angle(2), 0.4f, 1e-4f);
+  EXPECT_NEAR(lanes.root_translation[lanes.stride], -0.035f, 1e-5f);
+}
+
 }  // namespace
 }  // namespace strata

@@ -449,6 +449,35 @@ TEST(OrbitCamera, FrameBoxFitsTheBoundingSphereInBothFieldsOfView) {
       }
 }
 
+TEST(OrbitCamera, FrameBoxTightPutsTheOutermostCornerOnTheMargin) {
+  const glm::vec3 lo{-4.0f, 0.0f, -2.0f}, hi{6.0f, 1.8f, 3.0f};
+  for (float aspect : {0.5f, 16.0f / 9.0f})
+    for (float yaw : {0.0f, 0.7f, -2.0f})
+      for (float pitch : {0.1f, 0.6f, 1.2f}) {
+        OrbitCamera camera;
+        camera.yaw = yaw;
+        camera.pitch = pitch;
+        const float margin = 1.1f;
+        camera.frame_box_tight(lo, hi, aspect, margin);
+        const glm::mat4 vp = camera.projection(aspect) * camera.view();
+        float reach = 0.0f;
+        for (int i = 0; i < 8; ++i) {
+          const glm::vec3 corner{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z};
+          const glm::vec4 clip = vp * glm::vec4(corner, 1.0f);
+          ASSERT_GT(clip.w, 0.0f);
+          const glm::vec3 ndc = glm::vec3(clip) / clip.w;
+          reach = std::max({reach, std::abs(ndc.x), std::abs(ndc.y)});
+          ASSERT_GT(ndc.z, -1.0f);
+          ASSERT_LT(ndc.z, 1.0f);
+        }
+        EXPECT_NEAR(reach, 1.0f / margin, 1e-3f) << aspect << " " << yaw << " " << pitch;
+        OrbitCamera touching = camera, sphere = camera;
+        touching.frame_box_tight(lo, hi, aspect, 1.0f);
+        sphere.frame_box(lo, hi, aspect);
+        EXPECT_LE(touching.distance, sphere.distance + 1e-4f) << "without margin, never looser than the sphere fit";
+      }
+}
+
 TEST(OrbitCamera, PanKeepsThePointUnderTheCursor) {
   OrbitCamera camera;
   const float height = 600.0f, aspect = 1.5f, width = height * aspect;
