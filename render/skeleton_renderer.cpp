@@ -370,6 +370,8 @@ struct SkeletonRenderer::Impl {
     }
   }
 
+  std::vector<float> joint_radii, bone_radii;  // per joint, see size_radii
+
   void destroy_targets() {
     const GLuint fbos[] = {msaa_fbo, resolve_fbo};
     glDeleteFramebuffers(2, fbos);
@@ -394,19 +396,41 @@ struct SkeletonRenderer::Impl {
     if (input.walker_count == 0) return;
     const Skeleton& skeleton = *input.skeleton;
     const std::size_t joints = skeleton.joint_count();
-    const glm::mat4 joint_scale = glm::mat4(options.joint_radius);
+    size_radii(skeleton);
     for (std::size_t w = 0; w < input.walker_count; ++w) {
       const glm::vec3* pose = input.joint_positions.data() + w * joints;
       for (std::size_t j = 0; j < joints; ++j) {
         if (!is_finite(pose[j])) continue;
-        glm::mat4 m = joint_scale;
+        glm::mat4 m = glm::mat4(joint_radii[j]);
         m[3] = glm::vec4(pose[j], 1.0f);
         joint_instances.push_back(to_rows(m));
         const std::int32_t parent = skeleton.parents[j];
         if (parent < 0) continue;
-        if (auto bone_m = bone_transform(pose[parent], pose[j], options.bone_radius))
+        if (auto bone_m = bone_transform(pose[parent], pose[j], bone_radii[j]))
           bone_instances.push_back(to_rows(*bone_m));
       }
+    }
+  }
+
+  // Joint and bone thickness per joint, from the rest skeleton: the configured radii, shrunk where bones are
+  // short, so an 89-joint H-Anim hand reads as fingers rather than a ball of spheres. Bone j is parent -> j.
+  void size_radii(const Skeleton& skeleton) {
+    const std::size_t joints = skeleton.joint_count();
+    std::vector<float> shortest(joints, std::numeric_limits<float>::max());
+    for (std::size_t j = 0; j < joints; ++j) {
+      const std::int32_t parent = skeleton.parents[j];
+      if (parent < 0) continue;
+      const float length = glm::length(skeleton.centers[j] - skeleton.centers[parent]);
+      if (!(length > 1e-6f)) continue;
+      shortest[j] = std::min(shortest[j], length);
+      shortest[parent] = std::min(shortest[parent], length);
+    }
+    joint_radii.resize(joints);
+    bone_radii.resize(joints);
+    for (std::size_t j = 0; j < joints; ++j) {
+      const float limit = shortest[j] == std::numeric_limits<float>::max() ? options.joint_radius : shortest[j];
+      joint_radii[j] = std::min(options.joint_radius, 0.3f * limit);
+      bone_radii[j] = std::min(options.bone_radius, 0.25f * limit);
     }
   }
 
