@@ -3,7 +3,6 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include <unistd.h>
 
@@ -28,21 +27,15 @@ namespace strata::cli {
 namespace {
 
 struct CrowdOptions {
-  std::size_t walkers = 25;
+  SceneOptions scene;
   std::size_t frames = 60;
   std::string out = "out/crowd";
   int width = 1280;
   int height = 720;
-  std::string skeleton;
-  std::string clip;
-  bool rest = false;
-  std::uint64_t seed = 1;
   float fps = 30.0f;
-  int threads = 0;
   std::size_t png_every = 1;
   bool no_png = false;
   bool progress = true;
-  float spacing = 1.25f;
   float camera_yaw = 0.6f;
   float camera_pitch = 0.25f;
 };
@@ -68,19 +61,20 @@ class ProgressBar {
 
 int run_crowd(const CrowdOptions& o) {
   namespace fs = std::filesystem;
-  if (o.walkers == 0 || o.frames == 0 || o.width <= 0 || o.height <= 0 || !(o.fps > 0.0f)) {
-    std::cerr << "strata crowd: --walkers, --frames, --width, --height and --fps must be positive\n";
+  if (o.frames == 0 || o.width <= 0 || o.height <= 0 || !(o.fps > 0.0f)) {
+    std::cerr << "strata crowd: --frames, --width, --height and --fps must be positive\n";
     return 2;
   }
-  Rig rig;
-  int clip = -1;
+  const int threads = thread_count(o.scene);
+  tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  std::unique_ptr<CrowdScene> built;
   try {
-    rig = load_rig(o.skeleton);
-    clip = resolve_clip(rig, o.clip, o.rest);
+    built = build_scene(o.scene);
   } catch (const std::exception& e) {
     std::cerr << "strata crowd: " << e.what() << "\n";
     return 1;
   }
+  CrowdScene& scene = *built;
   std::error_code ec;
   fs::create_directories(o.out, ec);
   if (ec) {
@@ -88,18 +82,7 @@ int run_crowd(const CrowdOptions& o) {
     return 1;
   }
 
-  const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
-  tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-
   try {
-    CrowdScene scene(std::move(rig));
-    CrowdConfig config;
-    config.walkers = o.walkers;
-    config.seed = o.seed;
-    config.clip = clip;
-    config.spacing = o.spacing;
-    scene.spawn_grid(config);
-
     auto context = create_headless_gl_context();
     SkeletonRenderer renderer(o.width, o.height);
     Profiler profiler(120, true);
@@ -157,13 +140,14 @@ int run_crowd(const CrowdOptions& o) {
     summary["width"] = o.width;
     summary["height"] = o.height;
     summary["threads"] = threads;
-    summary["seed"] = o.seed;
+    summary["seed"] = o.scene.seed;
     summary["dt_s"] = dt;
     summary["skeleton"] = {{"name", scene.rig().skeleton.name},
                            {"source", scene.rig().skeleton.source},
                            {"joints", scene.rig().skeleton.joint_count()},
                            {"segments", scene.rig().skeleton.segments.size()},
                            {"sites", scene.rig().skeleton.sites.size()}};
+    const int clip = scene.clip_of(0);
     summary["clip"] = clip >= 0 ? nlohmann::json(scene.rig().clips[clip].name)
                       : clip == kAllClips ? nlohmann::json("all") : nlohmann::json(nullptr);
     summary["gl_renderer"] = context->renderer();
@@ -199,18 +183,12 @@ int run_crowd(const CrowdOptions& o) {
 void add_crowd_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<CrowdOptions>();
   auto* cmd = app.add_subcommand("crowd", "Simulate a crowd of walkers and render it headless (EGL) with a profile");
-  cmd->add_option("--walkers,-n", o->walkers, "Number of walkers on the ground grid")->capture_default_str();
+  add_scene_options(*cmd, o->scene);
   cmd->add_option("--frames,-f", o->frames, "Frames to simulate and render")->capture_default_str();
   cmd->add_option("--out,-o", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--width", o->width, "Image width")->capture_default_str();
   cmd->add_option("--height", o->height, "Image height")->capture_default_str();
-  cmd->add_option("--skeleton", o->skeleton, "H-Anim file (X3D or paper XML); default: the shipped 25-joint skeleton");
-  cmd->add_option("--clip", o->clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
-  cmd->add_flag("--rest", o->rest, "Hold the rest pose instead of playing a clip");
-  cmd->add_option("--seed", o->seed, "Seed for per-walker phase, rate and heading")->capture_default_str();
   cmd->add_option("--fps", o->fps, "Simulation frames per second (dt = 1/fps)")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
-  cmd->add_option("--spacing", o->spacing, "Metres between walkers on the grid")->capture_default_str();
   cmd->add_option("--camera-yaw", o->camera_yaw, "Camera angle about +Y in radians (0 = from the front, +Z)")
       ->capture_default_str();
   cmd->add_option("--camera-pitch", o->camera_pitch, "Camera angle above the ground in radians")->capture_default_str();

@@ -3,7 +3,6 @@
 // the live per-system timings; the full table prints on exit.
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include <chrono>
 #include <cstdio>
@@ -25,17 +24,12 @@ namespace strata::cli {
 namespace {
 
 struct ViewOptions {
-  std::size_t walkers = 25;
-  std::string skeleton;
-  std::string clip;
-  bool rest = false;
-  std::uint64_t seed = 1;
+  SceneOptions scene;
   int width = 1280;
   int height = 720;
   std::size_t frames = 0;  // 0 = until the window closes
   bool hidden = false;
   std::string screenshot_dir = "out/view";
-  int threads = 0;
 };
 
 std::string timing_title(const Profiler& profiler, double fps) {
@@ -50,24 +44,11 @@ std::string timing_title(const Profiler& profiler, double fps) {
 }
 
 int run_view(const ViewOptions& o) {
-  Rig rig;
-  int clip = -1;
-  try {
-    rig = load_rig(o.skeleton);
-    clip = resolve_clip(rig, o.clip, o.rest);
-  } catch (const std::exception& e) {
-    std::cerr << "strata view: " << e.what() << "\n";
-    return 1;
-  }
-  const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+  const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
-    CrowdScene scene(std::move(rig));
-    CrowdConfig config;
-    config.walkers = o.walkers;
-    config.seed = o.seed;
-    config.clip = clip;
-    scene.spawn_grid(config);
+    std::unique_ptr<CrowdScene> built = build_scene(o.scene);
+    CrowdScene& scene = *built;
 
     WindowOptions wo;
     wo.width = o.width;
@@ -155,17 +136,12 @@ int run_view(const ViewOptions& o) {
 void add_view_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ViewOptions>();
   auto* cmd = app.add_subcommand("view", "Open the crowd in a window with an orbit camera (needs a display)");
-  cmd->add_option("--walkers,-n", o->walkers, "Number of walkers")->capture_default_str();
-  cmd->add_option("--skeleton", o->skeleton, "H-Anim file (X3D or paper XML); default: the shipped skeleton");
-  cmd->add_option("--clip", o->clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
-  cmd->add_flag("--rest", o->rest, "Hold the rest pose");
-  cmd->add_option("--seed", o->seed, "Seed for per-walker variation")->capture_default_str();
+  add_scene_options(*cmd, o->scene);
   cmd->add_option("--width", o->width, "Window width")->capture_default_str();
   cmd->add_option("--height", o->height, "Window height")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Quit after F frames (0 = run until closed)")->capture_default_str();
   cmd->add_flag("--hidden", o->hidden, "Create the window hidden (smoke tests under Xvfb)");
   cmd->add_option("--screenshot-dir", o->screenshot_dir, "Where S saves PNG screenshots")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
   cmd->callback([o, &exit_code] { exit_code = run_view(*o); });
 }
 

@@ -1,5 +1,8 @@
 #include "apps/crowd_setup.h"
 
+#include <CLI/CLI.hpp>
+#include <tbb/info.h>
+
 #include <charconv>
 #include <stdexcept>
 
@@ -8,13 +11,15 @@
 
 namespace strata::cli {
 
-Rig load_rig(const std::string& skeleton_path) {
-  HumanoidAsset asset = skeleton_path.empty() ? load_default_humanoid() : load_humanoid_file(skeleton_path);
-  Rig rig;
-  rig.name = asset.skeleton.name.empty() ? std::string("humanoid") : asset.skeleton.name;
-  rig.skeleton = std::move(asset.skeleton);
-  rig.clips = std::move(asset.clips);
-  return rig;
+void add_scene_options(CLI::App& cmd, SceneOptions& o) {
+  cmd.add_option("--walkers,-n", o.walkers, "Number of walkers on the ground grid")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd.add_option("--skeleton", o.skeleton, "H-Anim file (X3D or paper XML); default: the shipped 25-joint skeleton");
+  cmd.add_option("--clip", o.clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
+  cmd.add_flag("--rest", o.rest, "Hold the rest pose instead of playing a clip");
+  cmd.add_option("--seed", o.seed, "Seed for per-walker phase, rate and heading")->capture_default_str();
+  cmd.add_option("--spacing", o.spacing, "Metres between walkers on the grid")->capture_default_str();
+  cmd.add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
 }
 
 int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
@@ -33,8 +38,22 @@ int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
     return index;
   std::string available;
   for (const AnimationClip& c : rig.clips) available += (available.empty() ? "" : ", ") + c.name;
-  throw std::invalid_argument("no clip '" + clip + "' in " + rig.skeleton.source +
-                              " (available: " + (available.empty() ? "none" : available) + ")");
+  throw std::invalid_argument("no clip '" + clip + "' in " + rig.skeleton.source + " (available: " + available +
+                              ", all)");
 }
+
+std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
+  Rig rig = to_rig(o.skeleton.empty() ? load_default_humanoid() : load_humanoid_file(o.skeleton));
+  CrowdConfig config;
+  config.walkers = o.walkers;
+  config.seed = o.seed;
+  config.spacing = o.spacing;
+  config.clip = resolve_clip(rig, o.clip, o.rest);
+  auto scene = std::make_unique<CrowdScene>(std::move(rig));
+  scene->spawn_grid(config);
+  return scene;
+}
+
+int thread_count(const SceneOptions& o) { return o.threads > 0 ? o.threads : tbb::info::default_concurrency(); }
 
 }  // namespace strata::cli

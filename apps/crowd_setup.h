@@ -1,17 +1,38 @@
 #pragma once
-// What `strata crowd` and `strata view` share: loading the rig they animate and choosing its clip.
+// What `strata crowd` and `strata view` share: the options that describe the crowd scene, and building it.
+#include <memory>
 #include <string>
 
-#include "components/rig.h"
+#include "systems/frame_script.h"
+
+namespace CLI {
+class App;
+}
 
 namespace strata::cli {
 
-// Loads FILE (or the embedded default skeleton when empty) into a Rig. Throws LoadError.
-Rig load_rig(const std::string& skeleton_path);
+struct SceneOptions {
+  std::size_t walkers = 25;
+  std::string skeleton;  // empty = the embedded default skeleton
+  std::string clip;      // name, index or "all"; empty = all clips
+  bool rest = false;
+  std::uint64_t seed = 1;
+  float spacing = 1.25f;
+  int threads = 0;       // 0 = all cores
+};
+
+// Registers --walkers, --skeleton, --clip, --rest, --seed, --spacing and --threads on `cmd`.
+void add_scene_options(CLI::App& cmd, SceneOptions& options);
+
 // Resolves --clip to a walker clip selector: a clip name or index, "all" (every clip at once, as an X3D browser
 // plays a scene's TimeSensors together; the default when the rig has clips), or kRestPose when `rest` is set
-// or the rig has no clips.
-// Throws std::invalid_argument naming the clip and listing the available ones when it does not exist.
+// or the rig has no clips. Throws std::invalid_argument naming the clip and listing the available ones.
 int resolve_clip(const Rig& rig, const std::string& clip, bool rest);
+
+// Loads the rig (LoadError on bad input), resolves the clip and spawns the grid.
+std::unique_ptr<CrowdScene> build_scene(const SceneOptions& options);
+
+// Worker threads the options ask for, resolved against the machine.
+int thread_count(const SceneOptions& options);
 
 }  // namespace strata::cli

@@ -14,11 +14,7 @@
 namespace {
 
 strata::CrowdScene make_scene(std::size_t walkers) {
-  strata::HumanoidAsset asset = strata::load_default_humanoid();
-  strata::Rig rig;
-  rig.skeleton = asset.skeleton;
-  rig.clips = asset.clips;
-  strata::CrowdScene scene(rig);
+  strata::CrowdScene scene(strata::to_rig(strata::load_default_humanoid()));
   strata::CrowdConfig config;
   config.walkers = walkers;
   scene.spawn_grid(config);

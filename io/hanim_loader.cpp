@@ -84,4 +84,12 @@ HumanoidAsset load_default_humanoid() {
   return load_humanoid_text(*text, std::string("<embedded>/") + std::string(kName));
 }
 
+Rig to_rig(HumanoidAsset asset) {
+  Rig rig;
+  rig.name = asset.skeleton.name.empty() ? std::string("humanoid") : asset.skeleton.name;
+  rig.skeleton = std::move(asset.skeleton);
+  rig.clips = std::move(asset.clips);
+  return rig;
+}
+
 }  // namespace strata

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "components/animation_clip.h"
+#include "components/rig.h"
 #include "components/skeleton.h"
 #include "io/load_error.h"
 
@@ -27,5 +28,8 @@ HumanoidAsset load_humanoid_file(const std::filesystem::path& path);
 HumanoidAsset load_humanoid_text(std::string_view text, std::string_view source_name);
 // The shipped default: the paper's 25-joint skeleton (data/default_skeleton.x3d, embedded in the library).
 HumanoidAsset load_default_humanoid();
+
+// The shared rig of a loaded humanoid: its skeleton and clips, named after the humanoid.
+Rig to_rig(HumanoidAsset asset);
 
 }  // namespace strata

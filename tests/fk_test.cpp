@@ -188,10 +188,7 @@ TEST(Fk, UnnormalisedAndZeroQuaternionsGiveRotationsNotNaN) {
 }
 
 TEST(Fk, OutputIsIdenticalForOneAndTwoThreads) {
-  Rig rig;
-  HumanoidAsset asset = load_default_humanoid();
-  rig.skeleton = asset.skeleton;
-  rig.clips = asset.clips;
+  const Rig rig = to_rig(load_default_humanoid());
   std::uint64_t hashes[2];
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
