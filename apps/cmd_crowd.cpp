@@ -184,16 +184,17 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<CrowdOptions>();
   auto* cmd = app.add_subcommand("crowd", "Simulate a crowd of walkers and render it headless (EGL) with a profile");
   add_scene_options(*cmd, o->scene);
-  cmd->add_option("--frames,-f", o->frames, "Frames to simulate and render")->capture_default_str();
+  cmd->add_option("--frames,-f", o->frames, "Frames to simulate and render")->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));
   cmd->add_option("--out,-o", o->out, "Output directory")->capture_default_str();
-  cmd->add_option("--width", o->width, "Image width")->capture_default_str();
-  cmd->add_option("--height", o->height, "Image height")->capture_default_str();
+  cmd->add_option("--width", o->width, "Image width")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", o->height, "Image height")->capture_default_str()->check(CLI::Range(1, 16384));
   cmd->add_option("--fps", o->fps, "Simulation frames per second (dt = 1/fps)")->capture_default_str();
   cmd->add_option("--camera-yaw", o->camera_yaw, "Camera angle about +Y in radians (0 = from the front, +Z)")
       ->capture_default_str();
   cmd->add_option("--camera-pitch", o->camera_pitch, "Camera angle above the ground in radians")->capture_default_str();
   cmd->add_option("--png-every", o->png_every, "Write every K-th frame as PNG")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
   cmd->add_flag("--no-png", o->no_png, "Render but write no frames");
   cmd->add_flag("!--no-progress", o->progress, "Hide the progress bar");
   cmd->callback([o, &exit_code] { exit_code = run_crowd(*o); });

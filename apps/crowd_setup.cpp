@@ -13,7 +13,7 @@ namespace strata::cli {
 
 void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   cmd.add_option("--walkers,-n", o.walkers, "Number of walkers on the ground grid")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(std::size_t{1}, std::size_t{10'000'000}));
   cmd.add_option("--skeleton", o.skeleton, "H-Anim file (X3D or paper XML); default: the shipped 25-joint skeleton");
   cmd.add_option("--clip", o.clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
   cmd.add_flag("--rest", o.rest, "Hold the rest pose instead of playing a clip");
