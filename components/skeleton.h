@@ -20,7 +20,11 @@ enum class JointNaming : std::uint8_t { HAnim1_1, HAnim2019, Mixed };
 const char* to_string(JointNaming naming);
 
 // Rotation limits of one joint, radians, about the joint's local x, y, z axes (H-Anim llimit/ulimit; the paper's
-// limitx/limity/limitz). An axis whose lower > upper is unlimited; `present` is false when the file gave none.
+// limitx/limity/limitz); `present` is false when the file gave none (then every axis spans [-pi, pi]).
+// Three per-axis ranges only mean something with an Euler order. Strata's: R = Rx(x) * Rz(z) * Ry(y) (column
+// vectors; intrinsic x, then z, then y), taking the solution with |z| <= pi/2. For a hanging limb that reads as
+// flexion (x) of the abducted (z) and twisted (y) bone, so the gimbal lock sits at 90 deg abduction, outside every
+// hip's range, rather than at 90 deg flexion, which sitting and reaching forward hit. See components/euler.h.
 struct JointLimits {
   glm::vec3 lower{-3.14159265f};
   glm::vec3 upper{3.14159265f};

@@ -7,12 +7,14 @@ namespace strata {
 std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count) {
   if (joint_count == 0) throw std::invalid_argument("make_walker_table: a rig needs at least one joint");
   std::vector<FieldDesc> fields(kWalkerFieldCount);
-  fields[kWalkerPlacement] = {"placement", ScalarType::F32, 4, 0.0f};
+  fields[kWalkerPlacement] = {"placement", ScalarType::F32, 5, 0.0f};
   fields[kWalkerClock] = {"clock", ScalarType::F32, 3, 0.0f};
   fields[kWalkerLocalRotation] = {"local_rotation", ScalarType::F32, joint_count * 4, 0.0f};
   fields[kWalkerRootTranslation] = {"root_translation", ScalarType::F32, 3, 0.0f};
   fields[kWalkerWorld] = {"world", ScalarType::F32, joint_count * kAffineFloats, 0.0f};
   fields[kWalkerSkinning] = {"skinning", ScalarType::F32, joint_count * kAffineFloats, 0.0f};
+  fields[kWalkerIkGoal] = {"ik_goal", ScalarType::F32, kIkLimbs * kIkGoalFloats, 0.0f};
+  fields[kWalkerIkResult] = {"ik_result", ScalarType::F32, kIkLimbs * kIkResultFloats, 0.0f};
   return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
 }
 
@@ -31,6 +33,8 @@ WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count) {
   lanes.root_translation = table.f32_base(kWalkerRootTranslation);
   lanes.world = table.f32_base(kWalkerWorld);
   lanes.skinning = table.f32_base(kWalkerSkinning);
+  lanes.ik_goal = table.f32_base(kWalkerIkGoal);
+  lanes.ik_result = table.f32_base(kWalkerIkResult);
   return lanes;
 }
 

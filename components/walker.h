@@ -14,14 +14,27 @@
 namespace strata {
 
 inline constexpr std::uint32_t kAffineFloats = 12;
+inline constexpr std::uint32_t kIkLimbs = 4;          // left leg, right leg, left arm, right arm (systems/ik.h)
+// Per limb goal: position xyz (humanoid space), orientation quaternion xyzw (the lower joint's frame in humanoid
+// space), mode (IkMode as float), swivel offset (rad), pole xyz (humanoid space; all zero = the rig's pole).
+inline constexpr std::uint32_t kIkGoalFloats = 12;
+enum IkGoalComponent : std::uint32_t {
+  kGoalPx, kGoalPy, kGoalPz, kGoalQx, kGoalQy, kGoalQz, kGoalQw, kGoalMode, kGoalSwivel, kGoalPoleX, kGoalPoleY,
+  kGoalPoleZ
+};
+// Per limb result: flags (IkFlags as float), position error (m).
+inline constexpr std::uint32_t kIkResultFloats = 2;
 
 enum WalkerField : std::uint32_t {
-  kWalkerPlacement,        // 4: ground position x, y, z (m) and heading about +Y (rad)
+  kWalkerPlacement,        // 5: ground position x, y, z (m), heading about +Y (rad), uniform scale (body height /
+                           //    rig height); world = T(position) * Ry(heading) * S(scale) * humanoid space
   kWalkerClock,            // 3: animation time (s), playback rate (1 = real time), clip index (as float)
   kWalkerLocalRotation,    // joints*4: local joint rotation quaternion x, y, z, w (identity at rest)
   kWalkerRootTranslation,  // 3: HumanoidRoot translation (m), H-Anim's Humanoid-space offset of the root
   kWalkerWorld,            // joints*12: F(j), the joint's frame in humanoid space (paper eq. 2)
   kWalkerSkinning,         // joints*12: F(j) A(j)^-1, rest humanoid space -> posed humanoid space (eq. 3)
+  kWalkerIkGoal,           // kIkLimbs*kIkGoalFloats: limb goals, written by locomotion, read by IK
+  kWalkerIkResult,         // kIkLimbs*kIkResultFloats: what IK achieved
   kWalkerFieldCount
 };
 
@@ -39,6 +52,8 @@ struct WalkerLanes {
   float* root_translation = nullptr;
   float* world = nullptr;
   float* skinning = nullptr;
+  float* ik_goal = nullptr;
+  float* ik_result = nullptr;
 
   float* at(float* base, std::size_t component) const { return base + component * stride; }
 };

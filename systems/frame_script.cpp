@@ -27,8 +27,8 @@ Entity CrowdScene::spawn(const glm::vec3& position, float heading, float phase, 
   Entity e = world_.create(table_);
   EntityLocation loc = world_.location(e);
   SoaTable& t = walkers();
-  const float values[4] = {position.x, position.y, position.z, heading};
-  for (std::uint32_t c = 0; c < 4; ++c) t.f32(kWalkerPlacement, c)[loc.block] = values[c];
+  const float values[5] = {position.x, position.y, position.z, heading, 1.0f};
+  for (std::uint32_t c = 0; c < 5; ++c) t.f32(kWalkerPlacement, c)[loc.block] = values[c];
   t.f32(kWalkerClock, 0)[loc.block] = phase;
   t.f32(kWalkerClock, 1)[loc.block] = rate;
   t.f32(kWalkerClock, 2)[loc.block] = static_cast<float>(clip);

@@ -10,7 +10,7 @@
 
 namespace strata {
 
-// out[w * joints + j] = placement(w) * origin of F(j) of walker w. Resizes `out`.
+// out[w * joints + j] = placement(w) * origin of F(j) of walker w (position, heading and scale). Resizes `out`.
 void gather_joint_positions(const WalkerLanes& lanes, std::vector<glm::vec3>& out);
 
 // Axis-aligned bounds of all gathered positions; false when there are none.

@@ -1,0 +1,86 @@
+#pragma once
+// IK system: analytic 7-DOF limb IK (IKAN's SRS chain, Tolani, Goswami & Badler 2000; maths in
+// ../shared/notes/tech-brief.md section 1, implemented here from the equations) for both arms and both legs of
+// every walker. Upper joint (shoulder/hip) 3 DOF, middle (elbow/knee) 1 DOF about its flexion axis, lower
+// (wrist/ankle) 3 DOF. The swivel angle of the middle joint about the upper->goal axis is set from a pole
+// direction (knees forward, elbows back) and moved to the nearest feasible swivel when joint limits forbid it.
+//
+// Runs after locomotion (which writes goals, the root and spine rotations) and before FK, whose input rotations
+// it overwrites for the limb joints.
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/vec3.hpp>
+
+#include "components/skeleton.h"
+#include "components/walker.h"
+
+namespace strata {
+
+// One limb of a rig, built once from the skeleton (immutable rig data).
+struct LimbChain {
+  std::string name;                 // "l_leg", "r_leg", "l_arm", "r_arm"
+  std::int32_t upper = -1;          // hip / shoulder joint index
+  std::int32_t middle = -1;         // knee / elbow
+  std::int32_t lower = -1;          // ankle / wrist
+  glm::vec3 flexion_axis{1, 0, 0};  // the middle joint's hinge axis in rest (humanoid) axes; a positive angle about
+                                    // it flexes (knee: +X, elbow: -X, see data/default_skeleton.x3d)
+  glm::vec3 pole{0, 0, 1};          // where the middle joint should point, rest axes of the upper joint's parent:
+                                    // knees forward (+Z), elbows back (-Z); a walker may override per frame
+};
+
+enum LimbIndex : std::uint32_t { kLeftLeg, kRightLeg, kLeftArm, kRightArm, kLimbCount };
+
+// The four limbs of an H-Anim skeleton by joint name (l/r_hip-knee-ankle, l/r_shoulder-elbow-wrist).
+// Throws std::invalid_argument naming the first missing joint.
+std::vector<LimbChain> make_limbs(const Skeleton& skeleton);
+
+// ---- Single-limb solver (pure maths; the system calls it per walker and limb) ---------------------------------
+
+// Goal modes (stored as floats in the walker's ik_goal columns).
+enum class IkMode : std::uint8_t { Off = 0, Position = 1, PositionOrientation = 2 };
+
+// Result flags, OR-ed (stored as a float in ik_result).
+enum IkFlags : std::uint32_t {
+  kIkReached = 1u << 0,            // the end effector is on the goal (within 1e-5 m)
+  kIkUnreachable = 1u << 1,        // goal beyond reach (or inside the inner reach): clamped just inside, flagged
+  kIkSwivelMoved = 1u << 2,        // the requested swivel violated limits; the nearest feasible swivel was taken
+  kIkLimitsInfeasible = 1u << 3,   // no swivel satisfies the limits: least-violation configuration, flagged
+  kIkOrientationClamped = 1u << 4, // the lower joint's rotation needed for the orientation goal broke its limits
+};
+
+struct LimbSolveInput {
+  // Effector goal (the lower joint's centre) in the upper joint's PARENT frame, expressed as if that parent were
+  // at rest: i.e. humanoid rest coordinates, where the upper joint sits at its rest centre.
+  glm::vec3 goal{0.0f};
+  IkMode mode = IkMode::Position;
+  // PositionOrientation: the desired rotation of the lower joint's frame, same frame as `goal` (R1*Rm*R2).
+  glm::quat orientation{1, 0, 0, 0};
+  glm::vec3 pole{0, 0, 1};     // preferred middle-joint direction, same frame
+  float swivel_offset = 0.0f;  // radians added to the pole's swivel (0 = middle joint in the goal-pole plane)
+};
+
+struct LimbSolveResult {
+  glm::quat upper{1, 0, 0, 0};   // local rotations to write into the three joints
+  glm::quat middle{1, 0, 0, 0};
+  glm::quat lower{1, 0, 0, 0};
+  float swivel = 0.0f;           // the swivel angle taken, radians
+  float position_error = 0.0f;   // |effector - requested goal| in metres after solving (0 when reached)
+  std::uint32_t flags = 0;
+};
+
+LimbSolveResult solve_limb(const Skeleton& skeleton, const LimbChain& limb, const LimbSolveInput& input);
+
+// ---- The system --------------------------------------------------------------------------------------------
+
+// Per walker and limb, reads the ik_goal columns (see components/walker.h: goal position in humanoid space, goal
+// orientation, mode, swivel offset), computes the limb's parent frame from the walker's current local rotations
+// (the ancestors of the upper joint, e.g. root, sacroiliac, spine), solves, writes the three joints' local
+// rotations and the ik_result columns (flags, position error). Walkers are independent: oneTBB chunks, output
+// identical for any thread count.
+void ik_system(const Skeleton& skeleton, std::span<const LimbChain> limbs, const WalkerLanes& lanes);
+
+}  // namespace strata
