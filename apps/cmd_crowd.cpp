@@ -38,6 +38,7 @@ struct CrowdOptions {
   bool progress = true;
   float camera_yaw = 0.6f;
   float camera_pitch = 0.25f;
+  bool follow = false;
 };
 
 // One line that rewrites itself; only when stderr is a terminal, so logs and CI output stay clean.
@@ -110,6 +111,9 @@ int run_crowd(const CrowdOptions& o) {
             // Frame the crowd once from its first pose; a camera that re-fits every frame would pump.
             glm::vec3 lo, hi;
             if (joint_bounds(joints, lo, hi)) camera.frame_box_tight(lo, hi, aspect);
+          } else if (o.follow) {
+            glm::vec3 lo, hi;
+            if (joint_bounds(joints, lo, hi)) camera.target = 0.5f * (lo + hi);
           }
           SkeletonDrawInput input{&scene.rig().skeleton, joints, scene.walker_count()};
           renderer.render(input, camera.view(), camera.projection(aspect));
@@ -193,6 +197,7 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--camera-yaw", o->camera_yaw, "Camera angle about +Y in radians (0 = from the front, +Z)")
       ->capture_default_str();
   cmd->add_option("--camera-pitch", o->camera_pitch, "Camera angle above the ground in radians")->capture_default_str();
+  cmd->add_flag("--follow", o->follow, "Keep the camera centred on the crowd as it moves");
   cmd->add_option("--png-every", o->png_every, "Write every K-th frame as PNG")->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
   cmd->add_flag("--no-png", o->no_png, "Render but write no frames");

@@ -11,5 +11,6 @@ namespace strata::cli {
 void add_info_command(CLI::App& app, int& exit_code);
 void add_crowd_command(CLI::App& app, int& exit_code);
 void add_view_command(CLI::App& app, int& exit_code);
+void add_report_command(CLI::App& app, int& exit_code);
 
 }  // namespace strata::cli

@@ -14,6 +14,9 @@ namespace strata::cli {
 void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   cmd.add_option("--walkers,-n", o.walkers, "Number of walkers on the ground grid")->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{10'000'000}));
+  cmd.add_option("--motion", o.motion,
+                 "What moves the walkers: 'walk' (walk generator along a track; the default) or 'clip' (the "
+                 "file's own animation)");
   cmd.add_option("--skeleton", o.skeleton, "H-Anim file (X3D or paper XML); default: the shipped 25-joint skeleton");
   cmd.add_option("--clip", o.clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
   cmd.add_flag("--rest", o.rest, "Hold the rest pose instead of playing a clip");
@@ -50,7 +53,20 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
   config.spacing = o.spacing;
   config.clip = resolve_clip(rig, o.clip, o.rest);
   auto scene = std::make_unique<CrowdScene>(std::move(rig));
-  scene->spawn_grid(config);
+  if (o.motion == "walk" || o.motion.empty()) {
+    const bool implicit = o.motion.empty();
+    if (implicit && (!o.clip.empty() || o.rest || !scene->walk_unavailable().empty())) {
+      config.motion = MotionSource::Clip;
+    } else {
+      if (!scene->walk_unavailable().empty()) throw std::invalid_argument(scene->walk_unavailable());
+      config.motion = MotionSource::Walk;
+    }
+  } else if (o.motion == "clip") {
+    config.motion = MotionSource::Clip;
+  } else {
+    throw std::invalid_argument("--motion must be 'walk' or 'clip', got '" + o.motion + "'");
+  }
+  scene->spawn_crowd(config);
   return scene;
 }
 

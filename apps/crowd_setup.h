@@ -12,6 +12,8 @@ class App;
 namespace strata::cli {
 
 struct SceneOptions {
+  std::string motion;    // "walk" (walk generator along paths), "clip" (the file's interpolators); empty = walk
+                         // when the skeleton has legs and arms to walk with, else clip; --clip implies clip
   std::size_t walkers = 25;
   std::string skeleton;  // empty = the embedded default skeleton
   std::string clip;      // name, index or "all"; empty = all clips

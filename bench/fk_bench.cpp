@@ -16,8 +16,9 @@ namespace {
 strata::CrowdScene make_scene(std::size_t walkers) {
   strata::CrowdScene scene(strata::to_rig(strata::load_default_humanoid()));
   strata::CrowdConfig config;
+  config.motion = strata::MotionSource::Clip;
   config.walkers = walkers;
-  scene.spawn_grid(config);
+  scene.spawn_crowd(config);
   strata::Profiler profiler(120, false);
   scene.simulate(0.5f, profiler);  // a non-rest pose
   return scene;

@@ -15,6 +15,7 @@ std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t join
   fields[kWalkerSkinning] = {"skinning", ScalarType::F32, joint_count * kAffineFloats, 0.0f};
   fields[kWalkerIkGoal] = {"ik_goal", ScalarType::F32, kIkLimbs * kIkGoalFloats, 0.0f};
   fields[kWalkerIkResult] = {"ik_result", ScalarType::F32, kIkLimbs * kIkResultFloats, 0.0f};
+  fields[kWalkerGait] = {"gait", ScalarType::F32, kGaitFloats, 0.0f};
   return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
 }
 
@@ -35,6 +36,7 @@ WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count) {
   lanes.skinning = table.f32_base(kWalkerSkinning);
   lanes.ik_goal = table.f32_base(kWalkerIkGoal);
   lanes.ik_result = table.f32_base(kWalkerIkResult);
+  lanes.gait = table.f32_base(kWalkerGait);
   return lanes;
 }
 

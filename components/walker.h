@@ -25,6 +25,30 @@ enum IkGoalComponent : std::uint32_t {
 // Per limb result: flags (IkFlags as float), position error (m).
 inline constexpr std::uint32_t kIkResultFloats = 2;
 
+// Locomotion state of a walking walker (systems/locomotion.h). World units (metres, radians) unless noted.
+enum GaitComponent : std::uint32_t {
+  kGaitDistance,        // distance travelled along the path (m), wrapped on closed paths
+  kGaitPhase,           // gait cycle phase in [0, 1), left heel strike = 0
+  kGaitCadence,         // current cadence (steps/min)
+  kGaitCadenceTarget,   // cadence it eases towards (steps/min)
+  kGaitHeight,          // body height (m)
+  kGaitPath,            // index of the path it follows (as float)
+  kGaitBaseSpeed,       // speed schedule: target speed = base * (1 + amplitude * sin(2 pi t / period + phase));
+  kGaitSpeedAmplitude,  //   base <= 0 disables the schedule (kGaitCadenceTarget is then set by the caller)
+  kGaitSpeedPhase,
+  kGaitLegs             // first per-leg component; leg l's component c is kGaitLegs + l * kLegFloats + c
+};
+enum LegComponent : std::uint32_t {
+  kLegSwinging,                              // 1 while in swing
+  kLegPlantX, kLegPlantY, kLegPlantZ, kLegPlantHeading,  // planted footprint: flat ankle pose (world)
+  kLegFromX, kLegFromY, kLegFromZ, kLegFromHeading, kLegFromPitch,  // ankle pose at toe-off
+  kLegToX, kLegToY, kLegToZ, kLegToHeading,  // swing target: the next footprint
+  kLegToDistance,                            // path distance of the swing target
+  kLegPlantDistance,                         // path distance of the planted footprint
+  kLegFloats
+};
+inline constexpr std::uint32_t kGaitFloats = kGaitLegs + 2 * kLegFloats;
+
 enum WalkerField : std::uint32_t {
   kWalkerPlacement,        // 5: ground position x, y, z (m), heading about +Y (rad), uniform scale (body height /
                            //    rig height); world = T(position) * Ry(heading) * S(scale) * humanoid space
@@ -35,6 +59,7 @@ enum WalkerField : std::uint32_t {
   kWalkerSkinning,         // joints*12: F(j) A(j)^-1, rest humanoid space -> posed humanoid space (eq. 3)
   kWalkerIkGoal,           // kIkLimbs*kIkGoalFloats: limb goals, written by locomotion, read by IK
   kWalkerIkResult,         // kIkLimbs*kIkResultFloats: what IK achieved
+  kWalkerGait,             // kGaitFloats: locomotion state (GaitComponent, LegComponent)
   kWalkerFieldCount
 };
 
@@ -54,6 +79,7 @@ struct WalkerLanes {
   float* skinning = nullptr;
   float* ik_goal = nullptr;
   float* ik_result = nullptr;
+  float* gait = nullptr;
 
   float* at(float* base, std::size_t component) const { return base + component * stride; }
 };

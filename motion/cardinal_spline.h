@@ -43,6 +43,8 @@ class CardinalSpline {
   float parameter_at(float s) const;          // inverse of length_at; s clamped (open) or wrapped (closed)
   glm::vec3 point_at_length(float s) const;   // Q(u(s))
   glm::vec3 tangent_at_length(float s) const; // unit tangent at arc length s (finite even where |dP/du| = 0)
+  // A NaN u or s reads as 0, and so does an infinite one on a closed spline (open ones clamp it): queries on a
+  // valid spline always return finite values. A default-constructed spline is empty: lengths 0, points (0,0,0).
 
  private:
   std::vector<glm::vec3> points_;
@@ -60,8 +62,8 @@ class DistanceCurve {
   DistanceCurve() = default;
   // Throws std::invalid_argument for fewer than 2 keys, non-increasing times or non-finite values.
   DistanceCurve(std::vector<float> times, std::vector<float> distances, float tension = 0.0f);
-  float distance(float t) const;  // clamped to the first/last key outside the time range
-  float speed(float t) const;     // dS/dt
+  float distance(float t) const;  // clamped to the first/last key outside the time range (NaN t: the first)
+  float speed(float t) const;     // dS/dt; 0 outside the time range
   float start_time() const;
   float end_time() const;
 
@@ -70,7 +72,9 @@ class DistanceCurve {
 };
 
 // A short path whose arc-length table lives on the stack, for curves rebuilt every frame (a swinging foot):
-// up to kMaxPoints control points, open, no allocation.
+// up to kMaxPoints control points, open, no allocation. Throws std::invalid_argument for 0 or more than
+// kMaxPoints points or non-finite input; consecutive repeats are removed, and one distinct point is a path of
+// length 0 that stays on it.
 class SmallCardinalPath {
  public:
   static constexpr std::size_t kMaxPoints = 6;

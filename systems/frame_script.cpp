@@ -4,8 +4,10 @@
 #include <cstring>
 #include <random>
 
+#include "motion/track.h"
 #include "systems/animation_sample.h"
 #include "systems/fk.h"
+#include "systems/ik.h"
 
 namespace strata {
 namespace {
@@ -21,6 +23,70 @@ CrowdScene::CrowdScene(Rig rig) {
   std::string name = rig.name.empty() ? std::string("walkers") : rig.name;
   rig_id_ = rigs_.add(std::move(rig));
   table_ = world_.add_table(make_walker_table(name, joints));
+  try {
+    locomotion_ = std::make_unique<const LocomotionRig>(make_locomotion_rig(this->rig().skeleton));
+  } catch (const std::exception& e) {
+    walk_error_ = e.what();
+  }
+}
+
+const std::vector<LimbChain>& CrowdScene::limbs() const {
+  static const std::vector<LimbChain> kNone;
+  return locomotion_ ? locomotion_->limbs : kNone;
+}
+
+void CrowdScene::spawn_crowd(const CrowdConfig& config) {
+  style_ = config.style;
+  motion_ = config.motion;
+  if (config.motion == MotionSource::Walk)
+    spawn_track(config);
+  else
+    spawn_grid(config);
+}
+
+Entity CrowdScene::spawn_walker(std::uint32_t path, float distance, float phase, float height, float cadence,
+                                float base_speed, float speed_amplitude, float speed_phase) {
+  if (!locomotion_) throw std::invalid_argument("cannot walk: " + walk_error_);
+  if (path >= paths_.size()) throw std::out_of_range("spawn_walker: no path " + std::to_string(path));
+  Entity e = spawn(glm::vec3(0.0f), 0.0f, 0.0f, 1.0f, kRestPose);
+  const std::uint32_t block = world_.location(e).block;
+  SoaTable& t = walkers();
+  const std::pair<std::uint32_t, float> values[] = {
+      {kGaitDistance, distance}, {kGaitPhase, phase - std::floor(phase)}, {kGaitCadence, cadence},
+      {kGaitCadenceTarget, cadence}, {kGaitHeight, height}, {kGaitPath, static_cast<float>(path)},
+      {kGaitBaseSpeed, base_speed}, {kGaitSpeedAmplitude, speed_amplitude}, {kGaitSpeedPhase, speed_phase}};
+  for (const auto& [component, value] : values) t.f32(kWalkerGait, component)[block] = value;
+  start_walking(*locomotion_, paths_, lanes(), block, style_);
+  return e;
+}
+
+void CrowdScene::spawn_track(const CrowdConfig& config) {
+  if (!locomotion_) throw std::invalid_argument("cannot walk: " + walk_error_);
+  std::mt19937_64 rng(config.seed);
+  const std::size_t n = config.walkers;
+  const int lanes = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(n)))));
+  set_paths(make_stadium_lanes(glm::vec3(0.0f), config.track_straight, config.track_radius, lanes,
+                               config.lane_spacing));
+  walkers().reserve(walkers().size() + n);
+  std::vector<float> lane_speed(static_cast<std::size_t>(lanes)), lane_phase(static_cast<std::size_t>(lanes));
+  for (int l = 0; l < lanes; ++l) {
+    lane_speed[l] = config.speed_min + (config.speed_max - config.speed_min) * unit_float(rng);
+    lane_phase[l] = 6.2831853f * unit_float(rng);
+  }
+  const std::size_t per_lane = (n + static_cast<std::size_t>(lanes) - 1) / static_cast<std::size_t>(lanes);
+  for (std::size_t i = 0; i < n; ++i) {
+    const int lane = static_cast<int>(i % static_cast<std::size_t>(lanes));
+    const std::size_t slot = i / static_cast<std::size_t>(lanes);
+    const float length = paths_[lane].length();
+    // Evenly spaced along the lane, jittered by up to a quarter of the gap, lanes staggered.
+    const float gap = length / static_cast<float>(per_lane);
+    const float distance = std::fmod((static_cast<float>(slot) + 0.25f * unit_float(rng) +
+                                      0.37f * static_cast<float>(lane)) * gap, length);
+    const float height = config.height_mean + config.height_spread * (2.0f * unit_float(rng) - 1.0f);
+    const float phase = unit_float(rng);
+    spawn_walker(static_cast<std::uint32_t>(lane), distance, phase, height, 100.0f, lane_speed[lane],
+                 config.speed_variation, lane_phase[lane]);
+  }
 }
 
 Entity CrowdScene::spawn(const glm::vec3& position, float heading, float phase, float rate, int clip) {
@@ -41,6 +107,7 @@ Entity CrowdScene::spawn(const glm::vec3& position, float heading, float phase, 
 bool CrowdScene::despawn(Entity walker) { return world_.destroy(walker); }
 
 void CrowdScene::spawn_grid(const CrowdConfig& config) {
+  motion_ = MotionSource::Clip;
   std::mt19937_64 rng(config.seed);
   const std::size_t n = config.walkers;
   const std::size_t columns = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(n))));
@@ -66,7 +133,16 @@ void CrowdScene::spawn_grid(const CrowdConfig& config) {
 void CrowdScene::simulate(float dt, Profiler& profiler) {
   [[maybe_unused]] Profiler& p = profiler;
   WalkerLanes l = lanes();
-  {
+  if (motion_ == MotionSource::Walk && locomotion_) {
+    {
+      STRATA_PROFILE_SCOPE(p, "locomotion");
+      locomotion_system(*locomotion_, paths_, l, dt, style_);
+    }
+    {
+      STRATA_PROFILE_SCOPE(p, "ik");
+      ik_system(rig().skeleton, locomotion_->limbs, l);
+    }
+  } else {
     STRATA_PROFILE_SCOPE(p, "animation");
     animation_system(rig(), l, dt);
   }

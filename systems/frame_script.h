@@ -2,42 +2,77 @@
 // The frame script: a crowd of walkers of one rig and the fixed order of systems that advance it, each inside a
 // profiler scope. `strata crowd`, `strata view` and the tests drive the same script; the renderer runs after it.
 //
-//   1. animation  clock + keyframed clip -> local rotations, root translation   (systems/animation_sample.h)
-//   2. fk         local rotations -> world matrices F(j), skinning F(j)A(j)^-1  (systems/fk.h)
+// A scene's walkers are driven one of two ways (its MotionSource), which picks the first systems:
+//   walk:  1. locomotion  path, cadence, footprints -> placement, pelvis, IK goals    (systems/locomotion.h)
+//          2. ik          goals -> arm and leg joint rotations                        (systems/ik.h)
+//   clip:  1. animation   clock + keyframed clip -> local rotations, root translation (systems/animation_sample.h)
+//   then   3. fk          local rotations -> world matrices F(j), skinning F(j)A(j)^-1 (systems/fk.h)
 //
-// Later issues insert locomotion and IK before FK, muscle after it, then skinning.
+// Later issues insert muscle after FK, then skinning.
 #include <cstdint>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
+#include <memory>
+#include <string>
+
 #include "components/rig.h"
 #include "components/walker.h"
 #include "ecs/world.h"
+#include "motion/cardinal_spline.h"
 #include "profiling/profiler.h"
+#include "systems/locomotion.h"
 
 namespace strata {
 
+enum class MotionSource { Walk, Clip };
+
 struct CrowdConfig {
+  MotionSource motion = MotionSource::Walk;
   std::size_t walkers = 25;
   float spacing = 1.25f;     // metres between grid neighbours
   std::uint64_t seed = 1;    // per-walker phase, rate and heading variation
   int clip = -2;             // clip each walker plays: an index, kAllClips (-2) or kRestPose (-1)
   float rate_jitter = 0.08f; // playback rate drawn in [1 - j, 1 + j]
   float heading_jitter = 0.35f;  // radians either side of facing +Z
+  // Walking crowds: a stadium track of concentric lanes, a few walkers per lane at the lane's speed schedule
+  // (each walker derives its own cadence from the speed and its height, so lanes never collide).
+  float height_mean = 1.72f, height_spread = 0.09f;  // body heights: mean +- spread (uniform), metres
+  float speed_min = 1.0f, speed_max = 1.4f;          // lane base speeds, m/s
+  float speed_variation = 0.1f;                      // relative amplitude of each lane's speed schedule
+  float track_straight = 5.0f, track_radius = 2.5f, lane_spacing = 0.9f;
+  GaitStyle style;
 };
 
 class CrowdScene {
  public:
   explicit CrowdScene(Rig rig);
 
-  // Places `config.walkers` walkers on a square grid centred on the origin, facing +Z with a little seeded
-  // variety (animation phase, playback rate, heading). Deterministic for a given seed.
-  void spawn_grid(const CrowdConfig& config);
+  // Spawns `config.walkers` walkers with seeded variety, deterministic for a given seed. Clip: on a square grid
+  // centred on the origin, facing +Z (animation phase, playback rate, heading). Walk: spread over the lanes of
+  // a stadium track (height, lane speed, phase, distance along the lane). Sets the scene's motion source.
+  void spawn_crowd(const CrowdConfig& config);
+  // A clip-driven walker.
   Entity spawn(const glm::vec3& position, float heading, float phase, float rate, int clip);
+  // A walking walker on `paths()[path]`: `distance` along it, gait `phase`, body `height` (m), and either a
+  // constant cadence target (base_speed <= 0) or a speed schedule.
+  Entity spawn_walker(std::uint32_t path, float distance, float phase, float height, float cadence, float base_speed,
+                      float speed_amplitude, float speed_phase);
   bool despawn(Entity walker);
 
-  // Runs systems 1..2 for one frame of `dt` seconds.
+  // Paths walkers follow (shared scene data). Replacing them keeps walkers' path indices.
+  void set_paths(std::vector<CardinalSpline> paths) { paths_ = std::move(paths); }
+  const std::vector<CardinalSpline>& paths() const { return paths_; }
+  // Why this rig cannot walk (missing limb joints), or empty when it can.
+  const std::string& walk_unavailable() const { return walk_error_; }
+  const LocomotionRig* locomotion_rig() const { return locomotion_.get(); }
+  const std::vector<LimbChain>& limbs() const;
+  MotionSource motion() const { return motion_; }
+  void set_motion(MotionSource motion) { motion_ = motion; }
+  GaitStyle& style() { return style_; }
+
+  // Runs the frame script (see above) for one frame of `dt` seconds.
   void simulate(float dt, Profiler& profiler);
 
   const Rig& rig() const { return rigs_.get(rig_id_); }
@@ -55,10 +90,18 @@ class CrowdScene {
   std::uint64_t state_hash() const;
 
  private:
+  void spawn_grid(const CrowdConfig& config);
+  void spawn_track(const CrowdConfig& config);
+
   RigLibrary rigs_;
   RigId rig_id_ = 0;
   World world_;
   std::uint32_t table_ = 0;
+  MotionSource motion_ = MotionSource::Clip;
+  std::unique_ptr<const LocomotionRig> locomotion_;  // null when the rig cannot walk
+  std::string walk_error_;
+  std::vector<CardinalSpline> paths_;
+  GaitStyle style_;
 };
 
 }  // namespace strata

@@ -69,9 +69,10 @@ TEST(Fk, RestPoseGivesIdentitySkinningMatrices) {
   ASSERT_EQ(rig.skeleton.joint_count(), 25u);
   CrowdScene scene(rig);
   CrowdConfig config;
+  config.motion = MotionSource::Clip;
   config.walkers = 20;
   config.clip = -1;
-  scene.spawn_grid(config);
+  scene.spawn_crowd(config);
   Profiler profiler;
   scene.simulate(1.0f / 30.0f, profiler);
   WalkerLanes lanes = scene.lanes();
@@ -195,8 +196,9 @@ TEST(Fk, OutputIsIdenticalForOneAndTwoThreads) {
     CrowdScene scene(rig);
     CrowdConfig config;
     config.walkers = 1500;  // several 256-walker chunks, so the parallel path really splits
+    config.motion = MotionSource::Clip;
     config.clip = rig.clips.empty() ? -1 : 0;
-    scene.spawn_grid(config);
+    scene.spawn_crowd(config);
     Profiler profiler;
     for (int f = 0; f < 5; ++f) scene.simulate(1.0f / 30.0f, profiler);
     hashes[threads - 1] = scene.state_hash();

@@ -8,7 +8,7 @@ int main() {
   strata::CrowdScene scene(strata::to_rig(strata::load_default_humanoid()));
   strata::CrowdConfig config;
   config.walkers = 4;
-  scene.spawn_grid(config);
+  scene.spawn_crowd(config);
   strata::Profiler profiler;
   scene.simulate(1.0f / 30.0f, profiler);
   const std::size_t joints = scene.rig().skeleton.joint_count();

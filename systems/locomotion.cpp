@@ -1,0 +1,393 @@
+#include "systems/locomotion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <glm/gtc/quaternion.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "motion/gait.h"
+
+namespace strata {
+namespace {
+
+constexpr float kTwoPi = 6.28318530718f;
+const glm::vec3 kUp{0.0f, 1.0f, 0.0f};
+
+float frac(float x) { return x - std::floor(x); }
+
+// 0 -> 0, 1 -> 1 with zero slope at both ends.
+float smoothstep01(float x) {
+  x = std::clamp(x, 0.0f, 1.0f);
+  return x * x * (3.0f - 2.0f * x);
+}
+
+// The swing's distance curve: a triangular velocity profile (rest, peak at mid-swing, rest), integrated.
+float swing_ease(float sigma) {
+  sigma = std::clamp(sigma, 0.0f, 1.0f);
+  return sigma < 0.5f ? 2.0f * sigma * sigma : 1.0f - 2.0f * (1.0f - sigma) * (1.0f - sigma);
+}
+
+// Polynomial smooth minimum: never above min(a, b), equal to it when |a - b| >= k.
+float smooth_min(float a, float b, float k) {
+  const float h = std::max(k - std::abs(a - b), 0.0f) / k;
+  return std::min(a, b) - h * h * k * 0.25f;
+}
+
+// Heading h faces (sin h, 0, cos h): +Z at 0, like H-Anim's forward.
+float heading_of(const glm::vec3& tangent) { return std::atan2(tangent.x, tangent.z); }
+glm::quat yaw(float h) { return glm::angleAxis(h, kUp); }
+glm::quat pitch(float p) { return glm::angleAxis(p, glm::vec3(1.0f, 0.0f, 0.0f)); }
+
+// Everything one walker's frame needs from its columns, gathered once so the maths below reads naturally.
+struct Pose2 {
+  glm::vec3 position;  // on the ground
+  float heading;
+};
+
+Pose2 path_pose(const CardinalSpline& path, float distance) {
+  return {path.point_at_length(distance), heading_of(path.tangent_at_length(distance))};
+}
+
+// The flat footprint of leg `leg` when the pelvis stands at path distance `d`: the rest ankle carried along.
+Pose2 footprint(const LocomotionRig& rig, const CardinalSpline& path, float d, int leg, float scale) {
+  const Pose2 p = path_pose(path, d);
+  return {p.position + yaw(p.heading) * (rig.ankle_rest[leg] * scale), p.heading};
+}
+
+struct AnklePose {
+  glm::vec3 position;
+  glm::quat orientation;  // the foot's frame in world axes
+};
+
+// Stance: flat on the footprint until the heel rises, then rolling about the ball (midtarsal) whose ground
+// contact stays put. tau is the fraction of stance done.
+AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant, float plant_heading, float tau,
+                      float scale, const GaitStyle& style, float* foot_pitch) {
+  const float p = style.toe_off_pitch * smoothstep01((tau - style.heel_off) / (1.0f - style.heel_off));
+  if (foot_pitch) *foot_pitch = p;
+  const glm::quat h = yaw(plant_heading);
+  const glm::vec3 ball = plant + h * ((rig.ball_rest[leg] - rig.ankle_rest[leg]) * scale);
+  const glm::quat q = h * pitch(p);
+  return {ball + q * ((rig.ankle_rest[leg] - rig.ball_rest[leg]) * scale), q};
+}
+
+struct WalkerFrame {
+  glm::vec3 position;  // placement on the ground
+  float heading;
+  float scale;
+  glm::vec3 to_humanoid(const glm::vec3& world) const {
+    return (yaw(-heading) * (world - position)) / scale;
+  }
+  glm::quat to_humanoid(const glm::quat& world) const { return yaw(-heading) * world; }
+};
+
+// Accessor for one walker's gait columns.
+struct GaitRef {
+  float* base;
+  std::size_t stride, i;
+  float& operator[](std::uint32_t c) const { return base[c * stride + i]; }
+  float& leg(int l, std::uint32_t c) const { return base[(kGaitLegs + l * kLegFloats + c) * stride + i]; }
+};
+
+void write_quat(const WalkerLanes& lanes, std::int32_t joint, std::size_t i, const glm::quat& q) {
+  if (joint < 0) return;
+  const std::size_t s = lanes.stride;
+  lanes.local_rotation[(joint * 4 + 0) * s + i] = q.x;
+  lanes.local_rotation[(joint * 4 + 1) * s + i] = q.y;
+  lanes.local_rotation[(joint * 4 + 2) * s + i] = q.z;
+  lanes.local_rotation[(joint * 4 + 3) * s + i] = q.w;
+}
+
+void write_goal(const WalkerLanes& lanes, std::uint32_t limb, std::size_t i, const glm::vec3& position,
+                const glm::quat& orientation, IkMode mode) {
+  const std::size_t s = lanes.stride;
+  float* g = lanes.ik_goal + static_cast<std::size_t>(limb) * kIkGoalFloats * s + i;
+  g[kGoalPx * s] = position.x;
+  g[kGoalPy * s] = position.y;
+  g[kGoalPz * s] = position.z;
+  g[kGoalQx * s] = orientation.x;
+  g[kGoalQy * s] = orientation.y;
+  g[kGoalQz * s] = orientation.z;
+  g[kGoalQw * s] = orientation.w;
+  g[kGoalMode * s] = static_cast<float>(mode);
+  g[kGoalSwivel * s] = 0.0f;
+  g[kGoalPoleX * s] = g[kGoalPoleY * s] = g[kGoalPoleZ * s] = 0.0f;  // the rig's pole
+}
+
+// Gait parameters at the walker's current cadence, tolerant of a cadence column outside the fitted range.
+GaitParameters current_gait(const GaitRef& g) {
+  return gait_parameters(g[kGaitHeight], std::clamp(g[kGaitCadence], kMinCadence, kMaxCadence));
+}
+
+void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
+              std::size_t i, float dt, const GaitStyle& style) {
+  const std::size_t st = lanes.stride;
+  GaitRef g{lanes.gait, st, i};
+  const CardinalSpline& path = paths[std::min<std::size_t>(static_cast<std::size_t>(std::max(g[kGaitPath], 0.0f)),
+                                                           paths.size() - 1)];
+  float& time = lanes.clock[0 * st + i];
+  time += dt;
+
+  // Speed schedule -> cadence target -> eased cadence. Phase and distance integrate it: no pop on change.
+  if (g[kGaitBaseSpeed] > 0.0f) {
+    const float speed = g[kGaitBaseSpeed] *
+                        (1.0f + g[kGaitSpeedAmplitude] * std::sin(kTwoPi * time / style.speed_period + g[kGaitSpeedPhase]));
+    g[kGaitCadenceTarget] = cadence_for_speed(speed, g[kGaitHeight]);
+  }
+  const float max_step = style.cadence_rate * dt;
+  g[kGaitCadence] += std::clamp(g[kGaitCadenceTarget] - g[kGaitCadence], -max_step, max_step);
+  const GaitParameters gp = current_gait(g);
+  g[kGaitPhase] = frac(g[kGaitPhase] + dt / gp.cycle_time);
+  g[kGaitDistance] += gp.speed * dt;
+  if (path.closed() && g[kGaitDistance] >= path.length()) {
+    // Keep the distance small so float precision holds over hours; footprint distances are compared modulo
+    // the path length.
+    g[kGaitDistance] -= path.length();
+  }
+  const float phase = g[kGaitPhase];
+  const float scale = g[kGaitHeight] / rig.rig_height;
+  const Pose2 pelvis = path_pose(path, g[kGaitDistance]);
+  const WalkerFrame frame{pelvis.position, pelvis.heading, scale};
+  lanes.placement[0 * st + i] = pelvis.position.x;
+  lanes.placement[1 * st + i] = 0.0f;
+  lanes.placement[2 * st + i] = pelvis.position.z;
+  lanes.placement[3 * st + i] = pelvis.heading;
+  lanes.placement[4 * st + i] = scale;
+
+  // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
+  const float sf = gp.stance_fraction();
+  AnklePose ankle[2];
+  float toe_pitch[2] = {0.0f, 0.0f};
+  for (int leg = 0; leg < 2; ++leg) {
+    const float psi = frac(phase - 0.5f * static_cast<float>(leg));
+    float& swinging = g.leg(leg, kLegSwinging);
+    if (swinging > 0.5f && psi < 0.5f) {
+      // Heel strike (the leg's phase wrapped): the swing target becomes the planted footprint.
+      g.leg(leg, kLegPlantX) = g.leg(leg, kLegToX);
+      g.leg(leg, kLegPlantY) = g.leg(leg, kLegToY);
+      g.leg(leg, kLegPlantZ) = g.leg(leg, kLegToZ);
+      g.leg(leg, kLegPlantHeading) = g.leg(leg, kLegToHeading);
+      g.leg(leg, kLegPlantDistance) = g.leg(leg, kLegToDistance);
+      swinging = 0.0f;
+    } else if (swinging < 0.5f && psi >= sf) {
+      // Toe-off: leave from the rolled stance pose; aim where the pelvis will be at heel strike plus the lead.
+      const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
+      float p = 0.0f;
+      const AnklePose from = stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), 1.0f, scale, style, &p);
+      const float strike_in = (1.0f - psi) * gp.cycle_time;
+      const float d_to = g[kGaitDistance] + gp.speed * strike_in + style.footprint_lead * gp.step_length;
+      const Pose2 to = footprint(rig, path, d_to, leg, scale);
+      g.leg(leg, kLegFromX) = from.position.x;
+      g.leg(leg, kLegFromY) = from.position.y;
+      g.leg(leg, kLegFromZ) = from.position.z;
+      g.leg(leg, kLegFromHeading) = g.leg(leg, kLegPlantHeading);
+      g.leg(leg, kLegFromPitch) = p;
+      g.leg(leg, kLegToX) = to.position.x;
+      g.leg(leg, kLegToY) = to.position.y;
+      g.leg(leg, kLegToZ) = to.position.z;
+      g.leg(leg, kLegToHeading) = to.heading;
+      g.leg(leg, kLegToDistance) = d_to;
+      swinging = 1.0f;
+    }
+    if (swinging < 0.5f) {
+      const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
+      ankle[leg] = stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), std::min(psi / sf, 1.0f), scale, style,
+                               &toe_pitch[leg]);
+    } else {
+      const float sigma = sf < 1.0f ? (psi - sf) / (1.0f - sf) : 1.0f;
+      const float e = swing_ease(sigma);
+      const glm::vec3 from{g.leg(leg, kLegFromX), g.leg(leg, kLegFromY), g.leg(leg, kLegFromZ)};
+      const glm::vec3 to{g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)};
+      // The double interpolant: a Cardinal arc through a raised midpoint, walked by the eased distance.
+      const glm::vec3 knots[3] = {from, 0.5f * (from + to) + kUp * (style.swing_clearance * scale), to};
+      const SmallCardinalPath arc(knots, 0.0f);
+      ankle[leg].position = arc.point_at_length(e * arc.length());
+      const glm::quat q_from = yaw(g.leg(leg, kLegFromHeading)) * pitch(g.leg(leg, kLegFromPitch));
+      const glm::quat q_to = yaw(g.leg(leg, kLegToHeading));
+      // The foot levels out in the first two thirds of the swing so it lands flat.
+      ankle[leg].orientation = glm::slerp(q_from, q_to, std::min(1.0f, 1.5f * e));
+    }
+  }
+
+  // ---- Pelvis: sway, rotation and tilt, and the height both legs can reach -------------------------------
+  const float angle = kTwoPi * phase;
+  const float pelvis_yaw = -style.pelvis_yaw * std::cos(angle);  // left hip forward at left heel strike
+  const float pelvis_tilt = style.pelvis_tilt * std::sin(angle);  // right side drops in left stance
+  const glm::quat sacro = yaw(pelvis_yaw) * glm::angleAxis(pelvis_tilt, glm::vec3(0.0f, 0.0f, 1.0f)) *
+                          pitch(style.pelvis_anterior_tilt);
+  glm::vec3 root_translation{style.lateral_sway * std::sin(angle), -style.nominal_drop, 0.0f};
+  glm::vec3 ankle_h[2];
+  for (int leg = 0; leg < 2; ++leg) ankle_h[leg] = frame.to_humanoid(ankle[leg].position);
+  float dy = root_translation.y;
+  for (int leg = 0; leg < 2; ++leg) {
+    // Hip position for root translation (x, 0, z): rt + c_sacro + R_sacro (c_hip - c_sacro).
+    const glm::vec3 hip0 = glm::vec3(root_translation.x, 0.0f, root_translation.z) + rig.sacro_center +
+                           sacro * (rig.hip_rest[leg] - rig.sacro_center);
+    const float reach = 0.998f * rig.leg_reach[leg];
+    const float dx = hip0.x - ankle_h[leg].x, dz = hip0.z - ankle_h[leg].z;
+    const float vertical = std::sqrt(std::max(reach * reach - dx * dx - dz * dz, 0.0f));
+    dy = smooth_min(dy, ankle_h[leg].y + vertical - hip0.y, 0.02f);
+  }
+  root_translation.y = dy;
+  lanes.root_translation[0 * st + i] = root_translation.x;
+  lanes.root_translation[1 * st + i] = root_translation.y;
+  lanes.root_translation[2 * st + i] = root_translation.z;
+
+  // ---- Rotations the IK does not own: root, pelvis, spine counter-rotation, toes ---------------------------
+  write_quat(lanes, rig.root, i, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+  write_quat(lanes, rig.sacroiliac, i, sacro);
+  write_quat(lanes, rig.spine, i, yaw(-0.5f * pelvis_yaw));
+  for (int leg = 0; leg < 2; ++leg)
+    write_quat(lanes, rig.ball[leg], i, pitch(-std::min(toe_pitch[leg], rig.toe_limit)));
+
+  // ---- IK goals --------------------------------------------------------------------------------------------
+  for (int leg = 0; leg < 2; ++leg)
+    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, ankle_h[leg], frame.to_humanoid(ankle[leg].orientation),
+               IkMode::PositionOrientation);
+  const float swing_scale = std::clamp(gp.step_length / (0.7f * scale), 0.3f, 1.6f);
+  for (int arm = 0; arm < 2; ++arm) {
+    // Left arm back at left heel strike (phase 0), forward half a cycle later; the right arm the opposite.
+    const float u = 4.0f * frac(phase + 0.5f * static_cast<float>(arm));
+    const glm::vec3 p = rig.wrist_path[arm].point(u);
+    const glm::vec3 rest = rig.wrist_rest[arm];
+    // The upper body rides on the root translation (the pelvis bob and sway), so the wrist path does too.
+    const glm::vec3 goal = root_translation + glm::vec3(rest.x + swing_scale * (p.x - rest.x), p.y,
+                                                        rest.z + swing_scale * (p.z - rest.z));
+    write_goal(lanes, arm == 0 ? kLeftArm : kRightArm, i, goal, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), IkMode::Position);
+  }
+}
+
+}  // namespace
+
+LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
+  LocomotionRig rig;
+  rig.limbs = make_limbs(skeleton);
+  auto need = [&](const char* name) {
+    const std::int32_t j = skeleton.find_joint(name);
+    if (j < 0) throw std::invalid_argument(std::string("locomotion: skeleton '") + skeleton.name + "' has no " + name);
+    return j;
+  };
+  rig.root = 0;
+  rig.sacroiliac = need("sacroiliac");
+  rig.spine = skeleton.find_joint("vl5");
+  rig.ball[0] = need("l_midtarsal");
+  rig.ball[1] = need("r_midtarsal");
+  rig.sacro_center = skeleton.centers[rig.sacroiliac];
+  if (skeleton.parents[rig.limbs[kLeftLeg].upper] != rig.sacroiliac ||
+      skeleton.parents[rig.limbs[kRightLeg].upper] != rig.sacroiliac)
+    throw std::invalid_argument("locomotion: the hips of '" + skeleton.name + "' must hang from sacroiliac");
+  for (int leg = 0; leg < 2; ++leg) {
+    const LimbChain& limb = rig.limbs[leg == 0 ? kLeftLeg : kRightLeg];
+    rig.hip_rest[leg] = skeleton.centers[limb.upper];
+    rig.ankle_rest[leg] = skeleton.centers[limb.lower];
+    rig.ball_rest[leg] = skeleton.centers[rig.ball[leg]];
+    // Reach is the farthest the knee's hinge range lets the ankle get, not |thigh| + |shin|: H-Anim's default
+    // centres put the ankle 18 deg behind the knee line, and the knee may not hyperextend that far.
+    const glm::vec3 thigh = skeleton.centers[limb.middle] - skeleton.centers[limb.upper];
+    const glm::vec3 shin = skeleton.centers[limb.lower] - skeleton.centers[limb.middle];
+    const JointLimits& knee = skeleton.limits[limb.middle];
+    const float lo = knee.present ? knee.lower.x : -3.1f, hi = knee.present ? knee.upper.x : 3.1f;
+    float reach = 0.0f;
+    for (int k = 0; k <= 512; ++k) {
+      const float theta = lo + (hi - lo) * static_cast<float>(k) / 512.0f;
+      reach = std::max(reach, glm::length(thigh + glm::angleAxis(theta, limb.flexion_axis) * shin));
+    }
+    rig.leg_reach[leg] = reach;
+  }
+  const JointLimits& toe = skeleton.limits[rig.ball[0]];
+  rig.toe_limit = toe.present ? std::max(-toe.lower.x, 0.0f) : 0.6f;
+  const std::int32_t tip = skeleton.find_site("skull_tip");
+  if (tip >= 0) {
+    rig.rig_height = skeleton.sites[tip].position.y;
+  } else {
+    float top = 0.0f;
+    for (const glm::vec3& c : skeleton.centers) top = std::max(top, c.y);
+    rig.rig_height = top + 0.13f;
+  }
+  for (int arm = 0; arm < 2; ++arm) {
+    const LimbChain& limb = rig.limbs[arm == 0 ? kLeftArm : kRightArm];
+    const glm::vec3 shoulder = skeleton.centers[limb.upper];
+    const glm::vec3 wrist = skeleton.centers[limb.lower];
+    rig.wrist_rest[arm] = wrist;
+    const float inward = arm == 0 ? -1.0f : 1.0f;  // towards the midline
+    const float reach = glm::length(skeleton.centers[limb.middle] - shoulder) +
+                        glm::length(wrist - skeleton.centers[limb.middle]);
+    // Back, mid, front, mid: raised a little everywhere so the elbow is never locked straight, more in front
+    // where the elbow flexes. Offsets are for a 0.7 m step; the system scales the horizontal part.
+    // A 1 cm raise already bends the elbow ~20 deg (the arm is nearly straight at rest), so raises stay small.
+    std::vector<glm::vec3> knots = {wrist + glm::vec3(0.0f, 0.006f, -0.08f), wrist + glm::vec3(0.0f, 0.008f, 0.0f),
+                                    wrist + glm::vec3(0.02f * inward, 0.03f, 0.11f),
+                                    wrist + glm::vec3(0.004f * inward, 0.009f, 0.004f)};
+    for (glm::vec3& k : knots) {
+      const glm::vec3 d = k - shoulder;
+      const float len = glm::length(d);
+      if (len > 0.97f * reach) k = shoulder + d * (0.97f * reach / len);
+    }
+    rig.wrist_path[arm] = CardinalSpline(knots, 0.0f, true);
+  }
+  return rig;
+}
+
+void start_walking(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
+                   std::size_t i, const GaitStyle& style) {
+  const std::size_t st = lanes.stride;
+  GaitRef g{lanes.gait, st, i};
+  const CardinalSpline& path = paths[std::min<std::size_t>(static_cast<std::size_t>(std::max(g[kGaitPath], 0.0f)),
+                                                           paths.size() - 1)];
+  if (g[kGaitBaseSpeed] > 0.0f)
+    g[kGaitCadenceTarget] = cadence_for_speed(
+        g[kGaitBaseSpeed] * (1.0f + g[kGaitSpeedAmplitude] * std::sin(g[kGaitSpeedPhase])), g[kGaitHeight]);
+  g[kGaitCadence] = std::clamp(g[kGaitCadenceTarget], kMinCadence, kMaxCadence);
+  const GaitParameters gp = current_gait(g);
+  const float scale = g[kGaitHeight] / rig.rig_height;
+  const float s = g[kGaitDistance];
+  const float sf = gp.stance_fraction();
+  const float lead = style.footprint_lead * gp.step_length;
+  for (int leg = 0; leg < 2; ++leg) {
+    const float psi = frac(g[kGaitPhase] - 0.5f * static_cast<float>(leg));
+    // The footprint of the last heel strike, psi cycles ago.
+    const float d_plant = s - gp.speed * psi * gp.cycle_time + lead;
+    const Pose2 plant = footprint(rig, path, d_plant, leg, scale);
+    g.leg(leg, kLegPlantX) = plant.position.x;
+    g.leg(leg, kLegPlantY) = plant.position.y;
+    g.leg(leg, kLegPlantZ) = plant.position.z;
+    g.leg(leg, kLegPlantHeading) = plant.heading;
+    g.leg(leg, kLegPlantDistance) = d_plant;
+    g.leg(leg, kLegSwinging) = 0.0f;
+    if (psi >= sf) {
+      float p = 0.0f;
+      const AnklePose from = stance_pose(rig, leg, plant.position, plant.heading, 1.0f, scale, style, &p);
+      const float d_to = s + gp.speed * (1.0f - psi) * gp.cycle_time + lead;
+      const Pose2 to = footprint(rig, path, d_to, leg, scale);
+      g.leg(leg, kLegFromX) = from.position.x;
+      g.leg(leg, kLegFromY) = from.position.y;
+      g.leg(leg, kLegFromZ) = from.position.z;
+      g.leg(leg, kLegFromHeading) = plant.heading;
+      g.leg(leg, kLegFromPitch) = p;
+      g.leg(leg, kLegToX) = to.position.x;
+      g.leg(leg, kLegToY) = to.position.y;
+      g.leg(leg, kLegToZ) = to.position.z;
+      g.leg(leg, kLegToHeading) = to.heading;
+      g.leg(leg, kLegToDistance) = d_to;
+      g.leg(leg, kLegSwinging) = 1.0f;
+    }
+  }
+  // Settle placement and goals for time "now" without advancing it.
+  walk_one(rig, paths, lanes, i, 0.0f, style);
+}
+
+void locomotion_system(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
+                       float dt, const GaitStyle& style) {
+  if (lanes.count == 0 || paths.empty()) return;
+  constexpr std::size_t kChunk = 64;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lanes.count, kChunk),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) walk_one(rig, paths, lanes, i, dt, style);
+                    },
+                    tbb::simple_partitioner());
+}
+
+}  // namespace strata

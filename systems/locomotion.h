@@ -1,0 +1,78 @@
+#pragma once
+// Locomotion system: the walk generator. For every walking walker it advances the gait clock from the cadence,
+// moves the body along its path (a closed Cardinal spline on the ground), places footprints, and writes the
+// goals the IK system solves: ankles (planted in stance, on a raised Cardinal swing arc in swing) and wrists
+// (swinging in anti-phase with the legs), plus the pelvis (root translation, sacroiliac rotation, spine
+// counter-rotation). Gait formulas: motion/gait.h; maths: ../shared/notes/tech-brief.md section 3.
+//
+// Gait determinants modelled: pelvis forward travel along the path; vertical oscillation, two bumps per stride,
+// lowest in double support (the pelvis is as high as both stance legs can reach, capped by a nominal height, so
+// knees flex as much as the step needs and never more); lateral sway towards the stance leg; pelvic rotation
+// about the vertical (+-4 deg) and tilt (list, the swing side drops +-4 deg); stance with a planted flat foot that
+// rolls onto its ball before toe-off (heel rise), whose midtarsal joint keeps the toes on the ground; a swing
+// arc with ground clearance, timed by a distance curve that starts and ends at rest (triangular velocity).
+//
+// Cadence may change at any time: phase and distance integrate it, footprints are placed once at toe-off, so a
+// change never moves a planted foot or pops the pelvis.
+#include <span>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "components/skeleton.h"
+#include "components/walker.h"
+#include "motion/cardinal_spline.h"
+#include "systems/ik.h"
+
+namespace strata {
+
+// Tuning of the walk; defaults give a natural adult walk. Angles in radians, lengths in metres at rig scale.
+struct GaitStyle {
+  float pelvis_yaw = 0.07f;          // pelvic rotation amplitude about the vertical (~4 deg)
+  float pelvis_tilt = 0.07f;         // pelvic list amplitude (~4 deg), swing side down
+  float lateral_sway = 0.022f;       // pelvis shift towards the stance leg
+  // Constant forward (anterior) pelvic tilt. The hip limits are relative to the pelvis, and a trailing thigh
+  // needs ~30 deg of extension at toe-off; real pelves tilt ~10 deg forward, which is what leaves room for it.
+  // Without it the report measured hip extension 0.013 rad past its 0.5 rad limit.
+  float pelvis_anterior_tilt = 0.15f;
+  float nominal_drop = 0.02f;        // pelvis below its rest height at mid-stance (a soft knee)
+  // Footprint placed this many step lengths ahead of the pelvis at heel strike. With the heel rise below it
+  // balances the leading leg at heel strike against the trailing one at toe-off: measured pelvis bob peak to
+  // peak 2.2 / 5.9 / 10.7 cm at 0.8 / 1.2 / 1.6 m/s (0.5 gave 10 cm and 0.65 gave 7.8 cm at 1.2 m/s).
+  float footprint_lead = 0.6f;
+  float heel_off = 0.35f;            // fraction of stance at which the heel starts to rise
+  float toe_off_pitch = 0.9f;        // foot pitch about its ball at toe-off (~52 deg, as measured in gait labs)
+  float swing_clearance = 0.06f;     // ankle lift above the straight line at mid-swing
+  float arm_swing = 0.17f;           // wrist travel forward/back at a 0.7 m step, scaled with step length
+  float cadence_rate = 25.0f;        // how fast cadence eases to its target, steps/min per second
+  float speed_period = 18.0f;        // seconds per cycle of the speed schedule
+};
+
+// Rig-constant data the locomotion system needs, derived once from the skeleton.
+struct LocomotionRig {
+  std::vector<LimbChain> limbs;      // make_limbs order: left leg, right leg, left arm, right arm
+  std::int32_t root = 0, sacroiliac = -1, spine = -1;   // spine: the joint that counter-rotates (vl5)
+  std::int32_t ball[2] = {-1, -1};   // l/r_midtarsal: the pivot of the heel rise
+  glm::vec3 sacro_center{0.0f};
+  glm::vec3 ankle_rest[2], ball_rest[2], hip_rest[2], wrist_rest[2];
+  float toe_limit = 0.6f;            // how far the midtarsal may dorsiflex to keep the toes down (rad)
+  float leg_reach[2] = {0, 0};       // |hip-knee| + |knee-ankle|
+  float rig_height = 1.75f;          // stature of the rig (skull_tip, else top joint + 0.13 m)
+  CardinalSpline wrist_path[2];      // closed loops in humanoid space: back, mid, front, mid
+};
+
+// Throws std::invalid_argument when the skeleton lacks a limb joint or the midtarsal joints.
+LocomotionRig make_locomotion_rig(const Skeleton& skeleton);
+
+// Places a walker at `distance` along `path` with its gait state consistent with `phase` (both feet on their
+// footprints, the swing foot mid-arc), so the first frame needs no settling. Writes the walker's gait, placement
+// and clock columns for walker `i` of `lanes`.
+void start_walking(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
+                   std::size_t i, const GaitStyle& style);
+
+// One frame for every walker: advances time by dt and writes placement, root translation, pelvis and spine
+// rotations, and IK goals for all four limbs. Walkers are independent (oneTBB chunks, deterministic).
+void locomotion_system(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
+                       float dt, const GaitStyle& style);
+
+}  // namespace strata
