@@ -50,6 +50,8 @@ enum IkFlags : std::uint32_t {
   kIkSwivelMoved = 1u << 2,        // the requested swivel violated limits; the nearest feasible swivel was taken
   kIkLimitsInfeasible = 1u << 3,   // no swivel satisfies the limits: least-violation configuration, flagged
   kIkOrientationClamped = 1u << 4, // the lower joint's rotation needed for the orientation goal broke its limits
+  kIkInvalidInput = 1u << 5,       // a non-finite goal, orientation, pole or swivel offset: a non-finite goal leaves
+                                   // the limb at rest (solve_limb) or untouched (ik_system); the others are ignored
 };
 
 struct LimbSolveInput {

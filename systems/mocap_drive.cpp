@@ -1,0 +1,140 @@
+#include "systems/mocap_drive.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "systems/animation_sample.h"
+
+namespace strata {
+
+MocapRig make_mocap_rig(const Skeleton& skeleton, const AnimationClip& clip, const FootContacts& contacts) {
+  MocapRig rig;
+  rig.skeleton = &skeleton;
+  rig.clip = &clip;
+  rig.contacts = &contacts;
+  rig.limbs = make_limbs(skeleton);
+  for (int leg = 0; leg < 2; ++leg) {
+    const LimbChain& l = rig.limbs[leg];
+    // The longest hip-ankle distance the knee's hinge range allows: the H-Anim rest leg is slightly bent and the
+    // knee may straighten only 0.05 rad past rest, so this is shorter than thigh + shin. Sampled rather than solved:
+    // it runs once per rig.
+    const glm::vec3 thigh = skeleton.centers[l.middle] - skeleton.centers[l.upper];
+    const glm::vec3 shin = skeleton.centers[l.lower] - skeleton.centers[l.middle];
+    const JointLimits& limits = skeleton.limits[l.middle];
+    const glm::vec3 axis = glm::normalize(l.flexion_axis);
+    const int axis_index = std::abs(axis.x) > 0.5f ? 0 : (std::abs(axis.y) > 0.5f ? 1 : 2);
+    const float lo = limits.present ? limits.lower[axis_index] : -3.14159265f;
+    const float hi = limits.present ? limits.upper[axis_index] : 3.14159265f;
+    float longest = 0.0f;
+    for (int k = 0; k <= 512; ++k) {
+      const float theta = lo + (hi - lo) * static_cast<float>(k) / 512.0f;
+      longest = std::max(longest, glm::length(thigh + glm::angleAxis(theta, axis) * shin));
+    }
+    rig.reach[leg] = longest * kMocapReachFraction;
+  }
+  for (const TranslationTrack& t : clip.translations) {
+    if (t.joint != 0 || t.values.size() < 2) continue;
+    rig.loop_displacement = t.values.back() - t.values.front();
+    rig.loop_displacement.y = 0.0f;
+  }
+  return rig;
+}
+
+void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt, MocapState& state) {
+  if (!rig.skeleton || !rig.clip || !rig.contacts) throw std::invalid_argument("mocap_drive_system: incomplete MocapRig");
+  if (state.legs.size() < lanes.count * 2) state.resize(lanes.count);
+  if (lanes.count == 0) return;
+  const Skeleton& skeleton = *rig.skeleton;
+  const std::size_t joints = skeleton.joint_count();
+  const float duration = rig.clip->duration;
+  const std::int32_t ankles[2] = {rig.limbs[kLeftLeg].lower, rig.limbs[kRightLeg].lower};
+  std::vector<glm::quat> local(joints), global(joints);
+  std::vector<glm::vec3> pos(joints);
+  for (std::size_t i = 0; i < lanes.count; ++i) {
+    float& time = lanes.at(lanes.clock, 0)[i];
+    const float rate = lanes.at(lanes.clock, 1)[i];
+    float* place[4] = {&lanes.at(lanes.placement, 0)[i], &lanes.at(lanes.placement, 1)[i],
+                       &lanes.at(lanes.placement, 2)[i], &lanes.at(lanes.placement, 3)[i]};
+    const float scale = lanes.at(lanes.placement, 4)[i];
+    const glm::quat heading = glm::angleAxis(*place[3], glm::vec3(0, 1, 0));
+    time += dt * rate;
+    if (!std::isfinite(time)) time = 0.0f;
+    int wraps = 0;
+    if (duration > 0.0f) {
+      // Whole loops at once, so a large dt or rate never spins here.
+      const float loops = std::floor(time / duration);
+      if (loops != 0.0f) {
+        time -= loops * duration;
+        if (time >= duration) time = 0.0f;  // rounding just below a multiple of duration
+        wraps = static_cast<int>(loops);
+        const glm::vec3 advance = heading * (rig.loop_displacement * (scale * loops));
+        for (int c = 0; c < 3; ++c) *place[c] += advance[c];
+      }
+    }
+
+    glm::vec3 root(0.0f);
+    sample_clip(*rig.clip, time, local, root);
+    for (std::size_t j = 0; j < joints; ++j)
+      for (int c = 0; c < 4; ++c) lanes.at(lanes.local_rotation, j * 4 + c)[i] = local[j][c];
+    for (int c = 0; c < 3; ++c) lanes.at(lanes.root_translation, c)[i] = root[c];
+    pose_globals(skeleton, local, root, global, pos);
+
+    const glm::vec3 origin(*place[0], *place[1], *place[2]);
+    for (int leg = 0; leg < 2; ++leg) {
+      MocapState::Leg& s = state.legs[i * 2 + static_cast<std::size_t>(leg)];
+      float* goal = lanes.ik_goal;
+      auto set = [&](std::uint32_t component, float v) {
+        lanes.at(goal, static_cast<std::size_t>(leg) * kIkGoalFloats + component)[i] = v;
+      };
+      const int interval = rig.contacts->stance_at(leg, time);
+      if (wraps != 0) s.interval = -1;  // a new loop: never carry a lock over (see the header)
+      if (interval < 0) {
+        s.locked = false;
+        s.interval = -1;
+        set(kGoalMode, static_cast<float>(IkMode::Off));
+        continue;
+      }
+      const std::int32_t ankle = ankles[leg];
+      if (s.interval != interval) {
+        s.locked = true;
+        s.interval = interval;
+        s.world = origin + heading * (pos[ankle] * scale);
+      }
+      // Release (for the rest of this stance) once the lock is out of the leg's reach from where the clip puts the
+      // hip: late in stance the body has moved on and the capture's ankle lifts for push-off, so an ankle held at
+      // its landing spot would need a longer leg. IK would clamp and flag it, leaving the foot off its lock anyway;
+      // releasing hands the foot back to the clip instead of a stretched, clamped leg.
+      if (s.locked) {
+        const glm::vec3 held = glm::inverse(heading) * (s.world - origin) / (scale != 0.0f ? scale : 1.0f);
+        if (glm::length(held - pos[rig.limbs[leg].upper]) > rig.reach[leg]) s.locked = false;
+      }
+      if (!s.locked) {
+        set(kGoalMode, static_cast<float>(IkMode::Off));
+        continue;
+      }
+      // World -> this frame's humanoid space; the placement may have moved since the lock (a wrap never keeps one,
+      // but a caller may move walkers).
+      const glm::vec3 h = glm::inverse(heading) * (s.world - origin) / (scale != 0.0f ? scale : 1.0f);
+      const glm::quat q = global[ankle];
+      set(kGoalPx, h.x);
+      set(kGoalPy, h.y);
+      set(kGoalPz, h.z);
+      set(kGoalQx, q.x);
+      set(kGoalQy, q.y);
+      set(kGoalQz, q.z);
+      set(kGoalQw, q.w);
+      set(kGoalMode, static_cast<float>(IkMode::PositionOrientation));
+      set(kGoalSwivel, 0.0f);
+      set(kGoalPoleX, 0.0f);
+      set(kGoalPoleY, 0.0f);
+      set(kGoalPoleZ, 0.0f);
+    }
+    for (std::uint32_t arm : {kLeftArm, kRightArm})
+      lanes.at(lanes.ik_goal, arm * kIkGoalFloats + kGoalMode)[i] = static_cast<float>(IkMode::Off);
+  }
+}
+
+}  // namespace strata
