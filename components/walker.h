@@ -36,6 +36,8 @@ enum GaitComponent : std::uint32_t {
   kGaitBaseSpeed,       // speed schedule: target speed = base * (1 + amplitude * sin(2 pi t / period + phase));
   kGaitSpeedAmplitude,  //   base <= 0 disables the schedule (kGaitCadenceTarget is then set by the caller)
   kGaitSpeedPhase,
+  kGaitDipHeight,       // pelvis height limit (root translation y, humanoid units) at the last heel strike
+  kGaitDipAge,          // seconds since that heel strike
   kGaitLegs             // first per-leg component; leg l's component c is kGaitLegs + l * kLegFloats + c
 };
 enum LegComponent : std::uint32_t {

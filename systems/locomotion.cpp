@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include <glm/gtc/quaternion.hpp>
@@ -117,6 +118,42 @@ void write_goal(const WalkerLanes& lanes, std::uint32_t limb, std::size_t i, con
   g[kGoalPoleX * s] = g[kGoalPoleY * s] = g[kGoalPoleZ * s] = 0.0f;  // the rig's pole
 }
 
+// Pelvis rotation (yaw, list, constant anterior tilt) and sideways shift at a gait phase.
+struct PelvisMotion {
+  glm::quat sacro;
+  float sway;
+  float yaw;
+};
+
+PelvisMotion pelvis_motion(const GaitStyle& style, float phase) {
+  const float angle = kTwoPi * phase;
+  PelvisMotion m;
+  m.yaw = -style.pelvis_yaw * std::cos(angle);             // left hip forward at left heel strike
+  const float tilt = style.pelvis_tilt * std::sin(angle);  // right side drops in left stance
+  m.sacro = yaw(m.yaw) * glm::angleAxis(tilt, glm::vec3(0.0f, 0.0f, 1.0f)) * pitch(style.pelvis_anterior_tilt);
+  m.sway = style.lateral_sway * std::sin(angle);
+  return m;
+}
+
+// The highest root translation y (humanoid units) at which both hips still reach their ankles (world positions),
+// for a pelvis placed by `frame` and moving as `motion`. smooth > 0 blends the two legs' limits (continuous
+// output for the per-frame value); 0 takes the plain minimum.
+float reach_limit(const LocomotionRig& rig, const WalkerFrame& frame, const PelvisMotion& motion,
+                  const glm::vec3 ankle_world[2], float start, float smooth) {
+  float dy = start;
+  for (int leg = 0; leg < 2; ++leg) {
+    const glm::vec3 a = frame.to_humanoid(ankle_world[leg]);
+    // Hip position for root translation (sway, 0, 0): rt + c_sacro + R_sacro (c_hip - c_sacro).
+    const glm::vec3 hip = glm::vec3(motion.sway, 0.0f, 0.0f) + rig.sacro_center +
+                          motion.sacro * (rig.hip_rest[leg] - rig.sacro_center);
+    const float reach = 0.998f * rig.leg_reach[leg];
+    const float dx = hip.x - a.x, dz = hip.z - a.z;
+    const float limit = a.y + std::sqrt(std::max(reach * reach - dx * dx - dz * dz, 0.0f)) - hip.y;
+    dy = smooth > 0.0f ? smooth_min(dy, limit, smooth) : std::min(dy, limit);
+  }
+  return dy;
+}
+
 // Gait parameters at the walker's current cadence, tolerant of a cadence column outside the fitted range.
 GaitParameters current_gait(const GaitRef& g) {
   return gait_parameters(g[kGaitHeight], std::clamp(g[kGaitCadence], kMinCadence, kMaxCadence));
@@ -192,60 +229,119 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
       g.leg(leg, kLegToDistance) = d_to;
       swinging = 1.0f;
     }
-    if (swinging < 0.5f) {
-      const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
-      ankle[leg] = stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), std::min(psi / sf, 1.0f), scale, style,
-                               &toe_pitch[leg]);
+  }
+  // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
+  // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
+  // swinging leg lands on its target. Arcs are built once per frame.
+  struct Swing {
+    SmallCardinalPath arc;
+    glm::quat from, to;
+  };
+  auto make_swing = [&](const glm::vec3& from, float from_heading, float from_pitch, const glm::vec3& to,
+                        float to_heading) {
+    // The double interpolant: a Cardinal arc through a raised midpoint, walked by an eased distance curve.
+    const glm::vec3 knots[3] = {from, 0.5f * (from + to) + kUp * (style.swing_clearance * scale), to};
+    return Swing{SmallCardinalPath(knots, 0.0f), yaw(from_heading) * pitch(from_pitch), yaw(to_heading)};
+  };
+  struct LegPath {
+    bool swinging;
+    float psi;
+    glm::vec3 plant;  // stance: the footprint; swing: the one it lands on
+    float plant_heading;
+    std::optional<Swing> swing;  // swing: the current arc; stance: the predicted next one
+  } legs[2];
+  for (int leg = 0; leg < 2; ++leg) {
+    LegPath& lp = legs[leg];
+    lp.swinging = g.leg(leg, kLegSwinging) > 0.5f;
+    lp.psi = frac(phase - 0.5f * static_cast<float>(leg));
+    if (lp.swinging) {
+      lp.plant = {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)};
+      lp.plant_heading = g.leg(leg, kLegToHeading);
+      lp.swing = make_swing({g.leg(leg, kLegFromX), g.leg(leg, kLegFromY), g.leg(leg, kLegFromZ)},
+                            g.leg(leg, kLegFromHeading), g.leg(leg, kLegFromPitch), lp.plant, lp.plant_heading);
     } else {
-      const float sigma = sf < 1.0f ? (psi - sf) / (1.0f - sf) : 1.0f;
-      const float e = swing_ease(sigma);
-      const glm::vec3 from{g.leg(leg, kLegFromX), g.leg(leg, kLegFromY), g.leg(leg, kLegFromZ)};
-      const glm::vec3 to{g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)};
-      // The double interpolant: a Cardinal arc through a raised midpoint, walked by the eased distance.
-      const glm::vec3 knots[3] = {from, 0.5f * (from + to) + kUp * (style.swing_clearance * scale), to};
-      const SmallCardinalPath arc(knots, 0.0f);
-      ankle[leg].position = arc.point_at_length(e * arc.length());
-      const glm::quat q_from = yaw(g.leg(leg, kLegFromHeading)) * pitch(g.leg(leg, kLegFromPitch));
-      const glm::quat q_to = yaw(g.leg(leg, kLegToHeading));
-      // The foot levels out in the first two thirds of the swing so it lands flat.
-      ankle[leg].orientation = glm::slerp(q_from, q_to, std::min(1.0f, 1.5f * e));
+      lp.plant = {g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
+      lp.plant_heading = g.leg(leg, kLegPlantHeading);
+      float p = 0.0f;
+      const AnklePose from = stance_pose(rig, leg, lp.plant, lp.plant_heading, 1.0f, scale, style, &p);
+      const float toe_off_in = std::max(sf - lp.psi, 0.0f) * gp.cycle_time;
+      const Pose2 to = footprint(rig, path,
+                                 g[kGaitDistance] + gp.speed * (toe_off_in + (1.0f - sf) * gp.cycle_time) +
+                                     style.footprint_lead * gp.step_length,
+                                 leg, scale);
+      lp.swing = make_swing(from.position, lp.plant_heading, p, to.position, to.heading);
     }
   }
+  // `ahead` in seconds, at most ~0.3 cycle so a leg changes mode at most once.
+  auto ankle_at = [&](int leg, float ahead, float* foot_pitch) -> AnklePose {
+    const LegPath& lp = legs[leg];
+    const float psi = lp.psi + ahead / gp.cycle_time;  // not wrapped: > 1 means past the next heel strike
+    if (foot_pitch) *foot_pitch = 0.0f;
+    const bool in_swing = lp.swinging ? psi < 1.0f : psi >= sf;
+    if (!in_swing) {
+      const float tau = std::min((lp.swinging ? psi - 1.0f : psi) / sf, 1.0f);
+      return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch);
+    }
+    const float sigma = sf < 1.0f ? std::clamp((psi - sf) / (1.0f - sf), 0.0f, 1.0f) : 1.0f;
+    const float e = swing_ease(sigma);
+    // The foot levels out in the first two thirds of the swing so it lands flat.
+    return {lp.swing->arc.point_at_length(e * lp.swing->arc.length()),
+            glm::slerp(lp.swing->from, lp.swing->to, std::min(1.0f, 1.5f * e))};
+  };
+  for (int leg = 0; leg < 2; ++leg) ankle[leg] = ankle_at(leg, 0.0f, &toe_pitch[leg]);
 
   // ---- Pelvis: sway, rotation and tilt, and the height both legs can reach -------------------------------
-  const float angle = kTwoPi * phase;
-  const float pelvis_yaw = -style.pelvis_yaw * std::cos(angle);  // left hip forward at left heel strike
-  const float pelvis_tilt = style.pelvis_tilt * std::sin(angle);  // right side drops in left stance
-  const glm::quat sacro = yaw(pelvis_yaw) * glm::angleAxis(pelvis_tilt, glm::vec3(0.0f, 0.0f, 1.0f)) *
-                          pitch(style.pelvis_anterior_tilt);
-  glm::vec3 root_translation{style.lateral_sway * std::sin(angle), -style.nominal_drop, 0.0f};
-  glm::vec3 ankle_h[2];
-  for (int leg = 0; leg < 2; ++leg) ankle_h[leg] = frame.to_humanoid(ankle[leg].position);
-  float dy = root_translation.y;
-  for (int leg = 0; leg < 2; ++leg) {
-    // Hip position for root translation (x, 0, z): rt + c_sacro + R_sacro (c_hip - c_sacro).
-    const glm::vec3 hip0 = glm::vec3(root_translation.x, 0.0f, root_translation.z) + rig.sacro_center +
-                           sacro * (rig.hip_rest[leg] - rig.sacro_center);
-    const float reach = 0.998f * rig.leg_reach[leg];
-    const float dx = hip0.x - ankle_h[leg].x, dz = hip0.z - ankle_h[leg].z;
-    const float vertical = std::sqrt(std::max(reach * reach - dx * dx - dz * dz, 0.0f));
-    dy = smooth_min(dy, ankle_h[leg].y + vertical - hip0.y, 0.02f);
+  // The pelvis goes as high as the nominal height allows, never higher than both legs reach, and smoothly: the
+  // height is kept under parabolas (curvature bob_curvature) through every reach limit seen in the recent past
+  // (the most binding one is kept with its age) and sampled ahead until the next foot event, whose poses are
+  // already known. Taking the reach limit alone gave ~1 cm/frame kinks where a constraint started or stopped
+  // binding; the parabolas turn those into smooth dips, lowest in double support as in a real gait.
+  const PelvisMotion motion = pelvis_motion(style, phase);
+  glm::vec3 root_translation{motion.sway, -style.nominal_drop, 0.0f};
+  const glm::vec3 ankle_world[2] = {ankle[0].position, ankle[1].position};
+  const float now_limit = reach_limit(rig, frame, motion, ankle_world, 1e9f, 0.0f);
+  const float curvature = style.bob_curvature / scale;  // humanoid units
+  g[kGaitDipAge] += dt;
+  if (now_limit <= g[kGaitDipHeight] + curvature * g[kGaitDipAge] * g[kGaitDipAge]) {
+    g[kGaitDipHeight] = now_limit;
+    g[kGaitDipAge] = 0.0f;
   }
-  root_translation.y = dy;
+  // Samples sit on a fixed grid of gait phase, not at fixed offsets from now: a narrow dip then lands on the
+  // same samples frame after frame instead of flickering between them (offset samples made 4 mm jumps).
+  float future = 1e9f;
+  constexpr float kSamplesPerCycle = 48.0f;
+  const float window = 0.28f;  // of a cycle: short enough that a leg changes mode at most once
+  for (float grid = std::floor(phase * kSamplesPerCycle) + 1.0f;; grid += 1.0f) {
+    const float ahead_cycles = grid / kSamplesPerCycle - phase;
+    if (ahead_cycles > window) break;
+    const float ahead = ahead_cycles * gp.cycle_time;
+    const float at_phase = frac(phase + ahead_cycles);
+    const Pose2 there = path_pose(path, g[kGaitDistance] + gp.speed * ahead);
+    const glm::vec3 feet[2] = {ankle_at(0, ahead, nullptr).position, ankle_at(1, ahead, nullptr).position};
+    const float limit = reach_limit(rig, WalkerFrame{there.position, there.heading, scale},
+                                    pelvis_motion(style, at_phase), feet, 1e9f, 0.0f);
+    future = std::min(future, limit + curvature * ahead * ahead);
+  }
+  const float past = g[kGaitDipHeight] + curvature * g[kGaitDipAge] * g[kGaitDipAge];
+  // Blended, not a plain min: where the rising parabola of the last dip meets the falling one of the next, a
+  // plain min leaves a corner (an 8 mm/frame change of vertical speed at 60 fps).
+  const float envelope = smooth_min(past, future, 0.025f);
+  root_translation.y = std::min(smooth_min(root_translation.y, envelope, 0.03f), now_limit);
   lanes.root_translation[0 * st + i] = root_translation.x;
   lanes.root_translation[1 * st + i] = root_translation.y;
   lanes.root_translation[2 * st + i] = root_translation.z;
 
   // ---- Rotations the IK does not own: root, pelvis, spine counter-rotation, toes ---------------------------
   write_quat(lanes, rig.root, i, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
-  write_quat(lanes, rig.sacroiliac, i, sacro);
-  write_quat(lanes, rig.spine, i, yaw(-0.5f * pelvis_yaw));
+  write_quat(lanes, rig.sacroiliac, i, motion.sacro);
+  write_quat(lanes, rig.spine, i, yaw(-0.5f * motion.yaw));
   for (int leg = 0; leg < 2; ++leg)
     write_quat(lanes, rig.ball[leg], i, pitch(-std::min(toe_pitch[leg], rig.toe_limit)));
 
   // ---- IK goals --------------------------------------------------------------------------------------------
   for (int leg = 0; leg < 2; ++leg)
-    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, ankle_h[leg], frame.to_humanoid(ankle[leg].orientation),
+    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, frame.to_humanoid(ankle[leg].position),
+               frame.to_humanoid(ankle[leg].orientation),
                IkMode::PositionOrientation);
   const float swing_scale = std::clamp(gp.step_length / (0.7f * scale), 0.3f, 1.6f);
   for (int arm = 0; arm < 2; ++arm) {
@@ -375,6 +471,9 @@ void start_walking(const LocomotionRig& rig, std::span<const CardinalSpline> pat
       g.leg(leg, kLegSwinging) = 1.0f;
     }
   }
+  // No strike seen yet: a limit far in the past never binds; the prediction of the next strike does.
+  g[kGaitDipHeight] = 0.0f;
+  g[kGaitDipAge] = 10.0f;
   // Settle placement and goals for time "now" without advancing it.
   walk_one(rig, paths, lanes, i, 0.0f, style);
 }

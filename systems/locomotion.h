@@ -36,6 +36,9 @@ struct GaitStyle {
   // Without it the report measured hip extension 0.013 rad past its 0.5 rad limit.
   float pelvis_anterior_tilt = 0.15f;
   float nominal_drop = 0.02f;        // pelvis below its rest height at mid-stance (a soft knee)
+  // The pelvis height follows parabolas of this curvature (m/s^2) through the lowest heights the last and the
+  // next heel strike allow, so the bob is smooth; hard reach limits alone gave ~1 cm/frame kinks.
+  float bob_curvature = 1.0f;
   // Footprint placed this many step lengths ahead of the pelvis at heel strike. With the heel rise below it
   // balances the leading leg at heel strike against the trailing one at toe-off: measured pelvis bob peak to
   // peak 2.2 / 5.9 / 10.7 cm at 0.8 / 1.2 / 1.6 m/s (0.5 gave 10 cm and 0.65 gave 7.8 cm at 1.2 m/s).
