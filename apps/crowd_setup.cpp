@@ -6,7 +6,9 @@
 #include <charconv>
 #include <stdexcept>
 
+#include "io/bvh.h"
 #include "io/hanim_loader.h"
+#include "motion/retarget.h"
 #include "systems/animation_sample.h"
 
 namespace strata::cli {
@@ -15,8 +17,8 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   cmd.add_option("--walkers,-n", o.walkers, "Number of walkers on the ground grid")->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{10'000'000}));
   cmd.add_option("--motion", o.motion,
-                 "What moves the walkers: 'walk' (walk generator along a track; the default) or 'clip' (the "
-                 "file's own animation)");
+                 "What moves the walkers: 'walk' (walk generator along a track; the default), 'clip' (the "
+                 "file's own animation) or FILE.bvh (motion capture retargeted onto the skeleton, feet locked by IK)");
   cmd.add_option("--skeleton", o.skeleton, "H-Anim file (X3D or paper XML); default: the shipped 25-joint skeleton");
   cmd.add_option("--clip", o.clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
   cmd.add_flag("--rest", o.rest, "Hold the rest pose instead of playing a clip");
@@ -63,8 +65,12 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
     }
   } else if (o.motion == "clip") {
     config.motion = MotionSource::Clip;
+  } else if (o.motion.size() > 4 && o.motion.compare(o.motion.size() - 4, 4, ".bvh") == 0) {
+    // Motion capture: retargeted onto this skeleton by the Poser -> H-Anim map, feet locked by IK in stance.
+    scene->set_mocap(retarget_bvh(load_bvh_file(o.motion), scene->rig().skeleton));
+    config.motion = MotionSource::Mocap;
   } else {
-    throw std::invalid_argument("--motion must be 'walk' or 'clip', got '" + o.motion + "'");
+    throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");
   }
   scene->spawn_crowd(config);
   return scene;

@@ -16,6 +16,7 @@ std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t join
   fields[kWalkerIkGoal] = {"ik_goal", ScalarType::F32, kIkLimbs * kIkGoalFloats, 0.0f};
   fields[kWalkerIkResult] = {"ik_result", ScalarType::F32, kIkLimbs * kIkResultFloats, 0.0f};
   fields[kWalkerGait] = {"gait", ScalarType::F32, kGaitFloats, 0.0f};
+  fields[kWalkerFootLock] = {"foot_lock", ScalarType::F32, 2 * kLockFloats, -1.0f};
   return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
 }
 
@@ -37,6 +38,7 @@ WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count) {
   lanes.ik_goal = table.f32_base(kWalkerIkGoal);
   lanes.ik_result = table.f32_base(kWalkerIkResult);
   lanes.gait = table.f32_base(kWalkerGait);
+  lanes.foot_lock = table.f32_base(kWalkerFootLock);
   return lanes;
 }
 

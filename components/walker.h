@@ -51,6 +51,15 @@ enum LegComponent : std::uint32_t {
 };
 inline constexpr std::uint32_t kGaitFloats = kGaitLegs + 2 * kLegFloats;
 
+// Foot locks of a mocap-driven walker (systems/mocap_drive.h), per leg: component kLock* + leg * kLockFloats.
+// New rows read -1 everywhere: unlocked, in no stance interval.
+enum FootLockComponent : std::uint32_t {
+  kLockOn,        // > 0.5 while the ankle is held at (x, y, z)
+  kLockInterval,  // index of the clip's stance interval the lock belongs to, -1 in swing
+  kLockX, kLockY, kLockZ,  // held ankle position, world
+  kLockFloats
+};
+
 enum WalkerField : std::uint32_t {
   kWalkerPlacement,        // 5: ground position x, y, z (m), heading about +Y (rad), uniform scale (body height /
                            //    rig height); world = T(position) * Ry(heading) * S(scale) * humanoid space
@@ -62,6 +71,7 @@ enum WalkerField : std::uint32_t {
   kWalkerIkGoal,           // kIkLimbs*kIkGoalFloats: limb goals, written by locomotion, read by IK
   kWalkerIkResult,         // kIkLimbs*kIkResultFloats: what IK achieved
   kWalkerGait,             // kGaitFloats: locomotion state (GaitComponent, LegComponent)
+  kWalkerFootLock,         // 2*kLockFloats: mocap foot locks (FootLockComponent)
   kWalkerFieldCount
 };
 
@@ -82,6 +92,7 @@ struct WalkerLanes {
   float* ik_goal = nullptr;
   float* ik_result = nullptr;
   float* gait = nullptr;
+  float* foot_lock = nullptr;
 
   float* at(float* base, std::size_t component) const { return base + component * stride; }
 };

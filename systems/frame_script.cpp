@@ -40,8 +40,39 @@ void CrowdScene::spawn_crowd(const CrowdConfig& config) {
   motion_ = config.motion;
   if (config.motion == MotionSource::Walk)
     spawn_track(config);
+  else if (config.motion == MotionSource::Mocap)
+    spawn_mocap(config);
   else
     spawn_grid(config);
+}
+
+void CrowdScene::set_mocap(RetargetResult capture) {
+  if (!locomotion_) throw std::invalid_argument("cannot lock feet: " + walk_error_);
+  mocap_ = std::make_unique<const RetargetResult>(std::move(capture));
+  mocap_rig_ = std::make_unique<const MocapRig>(make_mocap_rig(rig().skeleton, mocap_->clip, mocap_->contacts));
+}
+
+// Mocap walkers start on a grid, facing +Z with a little heading spread so the crowd fans out as it walks,
+// out of step (clip phase), each with its own height (uniform scale) and playback rate.
+void CrowdScene::spawn_mocap(const CrowdConfig& config) {
+  if (!mocap_) throw std::invalid_argument("spawn_crowd: no motion capture set (CrowdScene::set_mocap)");
+  std::mt19937_64 rng(config.seed);
+  const std::size_t n = config.walkers;
+  const std::size_t columns = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(n))));
+  const std::size_t rows = columns == 0 ? 0 : (n + columns - 1) / columns;
+  walkers().reserve(walkers().size() + n);
+  const float duration = std::max(mocap_->clip.duration, 1e-3f);
+  const float rig_height = locomotion_->rig_height;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float gx = (static_cast<float>(i % columns) - 0.5f * static_cast<float>(columns - 1)) * config.spacing;
+    const float gz = (static_cast<float>(i / columns) - 0.5f * static_cast<float>(rows - 1)) * config.spacing;
+    const float phase = unit_float(rng) * duration;
+    const float rate = 1.0f + (2.0f * unit_float(rng) - 1.0f) * 0.5f * config.rate_jitter;
+    const float heading = (2.0f * unit_float(rng) - 1.0f) * 0.5f * config.heading_jitter;
+    const float height = config.height_mean + config.height_spread * (2.0f * unit_float(rng) - 1.0f);
+    Entity e = spawn(glm::vec3(gx, 0.0f, gz), heading, phase, rate, kRestPose);
+    walkers().f32(kWalkerPlacement, 4)[world_.location(e).block] = height / rig_height;
+  }
 }
 
 Entity CrowdScene::spawn_walker(std::uint32_t path, float distance, float phase, float height, float cadence,
@@ -141,6 +172,15 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
     {
       STRATA_PROFILE_SCOPE(p, "ik");
       ik_system(rig().skeleton, locomotion_->limbs, l);
+    }
+  } else if (motion_ == MotionSource::Mocap && mocap_rig_) {
+    {
+      STRATA_PROFILE_SCOPE(p, "mocap");
+      mocap_drive_system(*mocap_rig_, l, dt);
+    }
+    {
+      STRATA_PROFILE_SCOPE(p, "ik");
+      ik_system(rig().skeleton, mocap_rig_->limbs, l);
     }
   } else {
     STRATA_PROFILE_SCOPE(p, "animation");

@@ -6,6 +6,8 @@
 //   walk:  1. locomotion  path, cadence, footprints -> placement, pelvis, IK goals    (systems/locomotion.h)
 //          2. ik          goals -> arm and leg joint rotations                        (systems/ik.h)
 //   clip:  1. animation   clock + keyframed clip -> local rotations, root translation (systems/animation_sample.h)
+//   mocap: 1. mocap_drive retargeted capture -> rotations, root motion, foot-lock goals (systems/mocap_drive.h)
+//          2. ik          goals -> locked feet
 //   then   3. fk          local rotations -> world matrices F(j), skinning F(j)A(j)^-1 (systems/fk.h)
 //
 // Later issues insert muscle after FK, then skinning.
@@ -22,11 +24,13 @@
 #include "ecs/world.h"
 #include "motion/cardinal_spline.h"
 #include "profiling/profiler.h"
+#include "motion/retarget.h"
 #include "systems/locomotion.h"
+#include "systems/mocap_drive.h"
 
 namespace strata {
 
-enum class MotionSource { Walk, Clip };
+enum class MotionSource { Walk, Clip, Mocap };
 
 struct CrowdConfig {
   MotionSource motion = MotionSource::Walk;
@@ -64,6 +68,9 @@ class CrowdScene {
   // Paths walkers follow (shared scene data). Replacing them keeps walkers' path indices.
   void set_paths(std::vector<CardinalSpline> paths) { paths_ = std::move(paths); }
   const std::vector<CardinalSpline>& paths() const { return paths_; }
+  // Motion capture retargeted onto this rig (motion/retarget.h); required before spawning with Mocap.
+  void set_mocap(RetargetResult capture);
+  const RetargetResult* mocap() const { return mocap_.get(); }
   // Why this rig cannot walk (missing limb joints), or empty when it can.
   const std::string& walk_unavailable() const { return walk_error_; }
   const LocomotionRig* locomotion_rig() const { return locomotion_.get(); }
@@ -92,6 +99,7 @@ class CrowdScene {
  private:
   void spawn_grid(const CrowdConfig& config);
   void spawn_track(const CrowdConfig& config);
+  void spawn_mocap(const CrowdConfig& config);
 
   RigLibrary rigs_;
   RigId rig_id_ = 0;
@@ -102,6 +110,8 @@ class CrowdScene {
   std::string walk_error_;
   std::vector<CardinalSpline> paths_;
   GaitStyle style_;
+  std::unique_ptr<const RetargetResult> mocap_;  // owns the clip and contacts mocap_rig_ points at
+  std::unique_ptr<const MocapRig> mocap_rig_;
 };
 
 }  // namespace strata

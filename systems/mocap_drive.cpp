@@ -43,9 +43,32 @@ MocapRig make_mocap_rig(const Skeleton& skeleton, const AnimationClip& clip, con
   return rig;
 }
 
-void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt, MocapState& state) {
+namespace {
+
+// One leg's lock, in the walker's foot_lock columns.
+struct LockRef {
+  const WalkerLanes& lanes;
+  std::size_t walker;
+  int leg;
+  float& at(std::uint32_t c) const {
+    return lanes.at(lanes.foot_lock, static_cast<std::size_t>(leg) * kLockFloats + c)[walker];
+  }
+  bool locked() const { return at(kLockOn) > 0.5f; }
+  void set_locked(bool on) const { at(kLockOn) = on ? 1.0f : 0.0f; }
+  int interval() const { return static_cast<int>(at(kLockInterval)); }
+  void set_interval(int i) const { at(kLockInterval) = static_cast<float>(i); }
+  glm::vec3 world() const { return {at(kLockX), at(kLockY), at(kLockZ)}; }
+  void set_world(const glm::vec3& p) const {
+    at(kLockX) = p.x;
+    at(kLockY) = p.y;
+    at(kLockZ) = p.z;
+  }
+};
+
+}  // namespace
+
+void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt) {
   if (!rig.skeleton || !rig.clip || !rig.contacts) throw std::invalid_argument("mocap_drive_system: incomplete MocapRig");
-  if (state.legs.size() < lanes.count * 2) state.resize(lanes.count);
   if (lanes.count == 0) return;
   const Skeleton& skeleton = *rig.skeleton;
   const std::size_t joints = skeleton.joint_count();
@@ -84,40 +107,40 @@ void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt,
 
     const glm::vec3 origin(*place[0], *place[1], *place[2]);
     for (int leg = 0; leg < 2; ++leg) {
-      MocapState::Leg& s = state.legs[i * 2 + static_cast<std::size_t>(leg)];
+      LockRef s{lanes, i, leg};
       float* goal = lanes.ik_goal;
       auto set = [&](std::uint32_t component, float v) {
         lanes.at(goal, static_cast<std::size_t>(leg) * kIkGoalFloats + component)[i] = v;
       };
       const int interval = rig.contacts->stance_at(leg, time);
-      if (wraps != 0) s.interval = -1;  // a new loop: never carry a lock over (see the header)
+      if (wraps != 0) s.set_interval(-1);  // a new loop: never carry a lock over (see the header)
       if (interval < 0) {
-        s.locked = false;
-        s.interval = -1;
+        s.set_locked(false);
+        s.set_interval(-1);
         set(kGoalMode, static_cast<float>(IkMode::Off));
         continue;
       }
       const std::int32_t ankle = ankles[leg];
-      if (s.interval != interval) {
-        s.locked = true;
-        s.interval = interval;
-        s.world = origin + heading * (pos[ankle] * scale);
+      if (s.interval() != interval) {
+        s.set_locked(true);
+        s.set_interval(interval);
+        s.set_world(origin + heading * (pos[ankle] * scale));
       }
       // Release (for the rest of this stance) once the lock is out of the leg's reach from where the clip puts the
       // hip: late in stance the body has moved on and the capture's ankle lifts for push-off, so an ankle held at
       // its landing spot would need a longer leg. IK would clamp and flag it, leaving the foot off its lock anyway;
       // releasing hands the foot back to the clip instead of a stretched, clamped leg.
-      if (s.locked) {
-        const glm::vec3 held = glm::inverse(heading) * (s.world - origin) / (scale != 0.0f ? scale : 1.0f);
-        if (glm::length(held - pos[rig.limbs[leg].upper]) > rig.reach[leg]) s.locked = false;
+      if (s.locked()) {
+        const glm::vec3 held = glm::inverse(heading) * (s.world() - origin) / (scale != 0.0f ? scale : 1.0f);
+        if (glm::length(held - pos[rig.limbs[leg].upper]) > rig.reach[leg]) s.set_locked(false);
       }
-      if (!s.locked) {
+      if (!s.locked()) {
         set(kGoalMode, static_cast<float>(IkMode::Off));
         continue;
       }
       // World -> this frame's humanoid space; the placement may have moved since the lock (a wrap never keeps one,
       // but a caller may move walkers).
-      const glm::vec3 h = glm::inverse(heading) * (s.world - origin) / (scale != 0.0f ? scale : 1.0f);
+      const glm::vec3 h = glm::inverse(heading) * (s.world() - origin) / (scale != 0.0f ? scale : 1.0f);
       const glm::quat q = global[ankle];
       set(kGoalPx, h.x);
       set(kGoalPy, h.y);

@@ -33,27 +33,6 @@ struct MocapRig {
 inline constexpr float kMocapReachFraction = 0.995f;
 MocapRig make_mocap_rig(const Skeleton& skeleton, const AnimationClip& clip, const FootContacts& contacts);
 
-// Per walker (indexed by the walker's block in its table) and leg: whether the foot is locked, in which stance
-// interval, and where (world space). Kept outside the walker table because components/walker.h is shared; the
-// owner must mirror the walker table's swap-remove with swap_remove(block) and growth with resize().
-struct MocapState {
-  struct Leg {
-    bool locked = false;   // the IK goal is on (false in swing, and after a release for the rest of the stance)
-    int interval = -1;     // the stance interval the lock was captured in; -1 in swing
-    glm::vec3 world{0.0f};
-  };
-  std::vector<Leg> legs;  // walker * 2 + leg
-
-  void resize(std::size_t walkers) { legs.resize(walkers * 2); }
-  void swap_remove(std::size_t block) {
-    const std::size_t last = legs.size() / 2 - 1;
-    legs[block * 2] = legs[last * 2];
-    legs[block * 2 + 1] = legs[last * 2 + 1];
-    legs.resize(last * 2);
-  }
-  const Leg& leg(std::size_t walker, int leg_index) const { return legs[walker * 2 + static_cast<std::size_t>(leg_index)]; }
-};
-
 // For every walker: clock += dt * rate, wrapped into [0, duration) with the walker's placement advanced by the
 // loop's root displacement (rotated by its heading, times its scale) per wrap; the clip sampled into the local
 // rotations and root translation; and per leg in stance an IK goal at the ankle position captured when the stance
@@ -61,6 +40,8 @@ struct MocapState {
 // orientation (mode PositionOrientation); mode Off in swing and for the arms. A lock is released for the rest of
 // its stance once it leaves the leg's reach (see kMocapReachFraction); the foot then follows the clip (no blend). A wrap releases the locks: the clip
 // is not a seamless cycle, so a lock from the previous loop's last frames would not fit the next loop's pose.
-void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt, MocapState& state);
+// The lock state lives in the walker's foot_lock columns (components/walker.h), so it moves with the walker
+// when the table swap-removes.
+void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt);
 
 }  // namespace strata

@@ -92,7 +92,7 @@ TEST(StrataCrowd, WritesFramesTraceCsvAndSummary) {
     frames_by_system[e.at("name")].insert(e.at("args").at("frame").get<long>());
     ++count_by_system[e.at("name")];
   }
-  for (const char* system : {"frame", "animation", "fk", "render", "write_png"}) {
+  for (const char* system : {"frame", "locomotion", "ik", "fk", "render", "write_png"}) {
     EXPECT_EQ(count_by_system[system], 3) << system << ": one event per frame";
     EXPECT_EQ(frames_by_system[system].size(), 3u) << system;
   }
@@ -109,7 +109,56 @@ TEST(StrataCrowd, WritesFramesTraceCsvAndSummary) {
   EXPECT_EQ(header.rfind("system,", 0), 0u) << header;
 
   // The table goes to stdout with every system in it.
-  for (const char* system : {"animation", "fk", "render"}) EXPECT_NE(r.out.find(system), std::string::npos);
+  for (const char* system : {"locomotion", "ik", "fk", "render"}) EXPECT_NE(r.out.find(system), std::string::npos);
+}
+
+TEST(StrataCrowd, PlaysTheFilesOwnClipsOnRequest) {
+  fs::path out = scratch("clip");
+  Result r = run("crowd --motion clip --walkers 2 --frames 2 --no-png --no-progress --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary.at("clip"), "all");
+  std::set<std::string> systems;
+  for (const auto& s : summary.at("systems")) systems.insert(s.at("name").get<std::string>());
+  EXPECT_TRUE(systems.count("animation"));
+  EXPECT_FALSE(systems.count("locomotion"));
+}
+
+TEST(StrataCrowd, DrivesWalkersFromMotionCapture) {
+  fs::path bvh = fs::path(STRATA_SHARED_DATA) / "cmu_mocap_bvh" / "02_02_daz.bvh";
+  if (!fs::exists(bvh)) GTEST_SKIP() << "no " << bvh;
+  fs::path out = scratch("mocap");
+  Result r = run("crowd --motion " + bvh.string() + " --walkers 3 --frames 20 --width 96 --height 64 --png-every 10 "
+                 "--no-progress --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(fs::exists(out / "frame_0010.png"));
+  nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  std::set<std::string> systems;
+  for (const auto& s : summary.at("systems")) systems.insert(s.at("name").get<std::string>());
+  EXPECT_TRUE(systems.count("mocap") && systems.count("ik")) << summary.at("systems").dump();
+
+  Result bad = run("crowd --motion " + scratch("nope.bvh").string() + " --frames 1 --no-progress --out " +
+                   scratch("mocap_bad").string());
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.out.find("nope.bvh"), std::string::npos) << bad.out;
+}
+
+TEST(StrataReport, GaitWritesTheMeasuredTargets) {
+  fs::path json = scratch("gait.json");
+  Result r = run("report gait --walkers 4 --seconds 6 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  for (const char* key : {"foot_slide_mm_max", "ik_position_error_max_m", "limit_violations", "nan_count",
+                          "stride_length_error_pct", "walkers", "seconds"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j.at("walkers"), 4);
+  EXPECT_NEAR(j.at("seconds").get<double>(), 6.0, 1e-3);
+  EXPECT_LT(j.at("foot_slide_mm_max").get<double>(), 1.0);
+  EXPECT_LT(j.at("ik_position_error_max_m").get<double>(), 1e-5);
+  EXPECT_EQ(j.at("limit_violations"), 0);
+  EXPECT_EQ(j.at("nan_count"), 0);
+  EXPECT_LT(j.at("stride_length_error_pct").get<double>(), 2.0);
+  EXPECT_GT(j.at("strides").get<int>(), 10);
 }
 
 TEST(StrataCrowd, SameSeedSameStateWhateverTheThreadCount) {

@@ -258,16 +258,24 @@ TEST_F(RetargetWalk, MocapDriveLocksFeetAcrossLoops) {
     table->f32(kWalkerClock, 1)[b] = 1.0f;
   }
   WalkerLanes lanes = walker_lanes(*table, joints);
-  MocapState state;
   const float dt = 1.0f / 60.0f;
   const std::int32_t ankles[2] = {rig.limbs[kLeftLeg].lower, rig.limbs[kRightLeg].lower};
-  std::vector<MocapState::Leg> previous(6);
+  struct Lock {
+    bool locked = false;
+    int interval = -1;
+    glm::vec3 world{0.0f};
+  };
+  auto lock_of = [&](std::size_t w, int leg) {
+    auto c = [&](std::uint32_t k) { return lanes.at(lanes.foot_lock, static_cast<std::size_t>(leg) * kLockFloats + k)[w]; };
+    return Lock{c(kLockOn) > 0.5f, static_cast<int>(c(kLockInterval)), {c(kLockX), c(kLockY), c(kLockZ)}};
+  };
+  std::vector<Lock> previous(6);
   std::size_t locked_frames = 0;
   float worst = 0.0f;
   const glm::vec3 start0(lanes.at(lanes.placement, 0)[0], 0.0f, lanes.at(lanes.placement, 2)[0]);
   const int steps = static_cast<int>(3.2f * result_->clip.duration / dt);  // a little over three loops
   for (int step = 0; step < steps; ++step) {
-    mocap_drive_system(rig, lanes, dt, state);
+    mocap_drive_system(rig, lanes, dt);
     ik_system(skeleton, rig.limbs, lanes);
     fk_range(skeleton, lanes, 0, lanes.count);
     for (std::size_t w = 0; w < 3; ++w) {
@@ -276,8 +284,8 @@ TEST_F(RetargetWalk, MocapDriveLocksFeetAcrossLoops) {
       const glm::quat heading = glm::angleAxis(lanes.at(lanes.placement, 3)[w], glm::vec3(0, 1, 0));
       const float scale = lanes.at(lanes.placement, 4)[w];
       for (int leg = 0; leg < 2; ++leg) {
-        const MocapState::Leg& now = state.leg(w, leg);
-        MocapState::Leg& before = previous[w * 2 + leg];
+        const Lock now = lock_of(w, leg);
+        Lock& before = previous[w * 2 + leg];
         if (now.locked && before.locked && now.interval == before.interval) {
           // The ankle's world position from FK's world matrix F(ankle) (its translation column) and the placement.
           glm::vec3 ankle;
