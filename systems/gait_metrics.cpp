@@ -65,12 +65,20 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
       report_.limit_violation_max_rad = std::max<double>(report_.limit_violation_max_rad, v);
     }
 
-    // IK outcome per limb, in world metres.
+    // IK outcome per limb, in world metres: the goal against where FK actually put the end joint (not the
+    // solver's own error estimate), and the solver's flags.
     const float scale = l.placement[4 * s + w];
     for (std::uint32_t limb = 0; limb < kIkLimbs; ++limb) {
       const auto flags = static_cast<std::uint32_t>(l.ik_result[(limb * kIkResultFloats + 0) * s + w]);
-      const float error = l.ik_result[(limb * kIkResultFloats + 1) * s + w] * scale;
-      report_.ik_position_error_max_m = std::max<double>(report_.ik_position_error_max_m, error);
+      const float* goal = l.ik_goal + static_cast<std::size_t>(limb) * kIkGoalFloats * s + w;
+      if (goal[kGoalMode * s] != static_cast<float>(IkMode::Off)) {
+        const std::int32_t end = rig_.limbs[limb].lower;
+        const glm::vec3 reached{l.world[(end * kAffineFloats + 9) * s + w], l.world[(end * kAffineFloats + 10) * s + w],
+                                l.world[(end * kAffineFloats + 11) * s + w]};
+        const glm::vec3 wanted{goal[kGoalPx * s], goal[kGoalPy * s], goal[kGoalPz * s]};
+        report_.ik_position_error_max_m =
+            std::max<double>(report_.ik_position_error_max_m, glm::length(reached - wanted) * scale);
+      }
       report_.ik_unreachable += (flags & kIkUnreachable) != 0;
       report_.ik_limits_infeasible += (flags & kIkLimitsInfeasible) != 0;
       report_.ik_orientation_clamped += (flags & kIkOrientationClamped) != 0;

@@ -19,7 +19,7 @@ struct GaitReport {
   // Foot slide: the ball (midtarsal) over the whole stance and the ankle over its flat part, measured from the
   // FK output in world space, relative to where each was when its phase began; worst step, millimetres.
   double foot_slide_mm_max = 0, foot_slide_ball_mm_max = 0, foot_slide_ankle_mm_max = 0;
-  double ik_position_error_max_m = 0;       // worst limb goal miss over all frames, world metres
+  double ik_position_error_max_m = 0;       // worst limb goal miss (FK end joint vs goal), world metres
   std::uint64_t ik_unreachable = 0, ik_limits_infeasible = 0, ik_orientation_clamped = 0;  // limb-frames flagged
   std::uint64_t limit_violations = 0;       // joint-frames whose local rotation leaves its limits by > 1e-4 rad
   double limit_violation_max_rad = 0;
