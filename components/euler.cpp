@@ -13,8 +13,7 @@ namespace strata {
 // From the residual, x absorbs y's error and the rebuilt rotation stays exact; at the lock itself (y = 0) the
 // same formula yields x - y or x + y, the only defined combination. glm is column-major: (row r, col c) = m[c][r].
 // The work is done in double: near the lock the float products would lose the digits atan2 needs.
-glm::vec3 limit_angles(const glm::mat3& rotation) {
-  const glm::dmat3 m(rotation);
+glm::dvec3 limit_angles(const glm::dmat3& m) {
   const double cz = std::sqrt(m[0][0] * m[0][0] + m[2][0] * m[2][0]);
   const double sz = -m[1][0];
   // atan2(sin, cos) rather than asin(-R01): asin loses half its digits next to +-1, exactly where the lock is.
@@ -25,8 +24,10 @@ glm::vec3 limit_angles(const glm::mat3& rotation) {
   // Rows 1 and 2 of R dotted with row 1 of Rz Ry = [sin z cos y, cos z, sin z sin y]: cos x and sin x.
   const double cos_x = m[0][1] * s * cy + m[1][1] * c + m[2][1] * s * sy;
   const double sin_x = m[0][2] * s * cy + m[1][2] * c + m[2][2] * s * sy;
-  return {static_cast<float>(std::atan2(sin_x, cos_x)), static_cast<float>(y), static_cast<float>(z)};
+  return {std::atan2(sin_x, cos_x), y, z};
 }
+
+glm::vec3 limit_angles(const glm::mat3& rotation) { return glm::vec3(limit_angles(glm::dmat3(rotation))); }
 
 glm::mat3 rotation_from_limit_angles(const glm::vec3& angles) {
   const double sx = std::sin(angles.x), cx = std::cos(angles.x);

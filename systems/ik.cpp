@@ -11,6 +11,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "components/euler.h"
+
 namespace strata {
 namespace {
 
@@ -109,19 +111,8 @@ glm::quat to_quat(const dmat3& m) {
                    static_cast<float>(z / len));
 }
 
-// limit_angles (components/euler.h) in double, same derivation: the search compares against limits at bisection
-// resolution.
-dvec3 euler_angles(const dmat3& m) {
-  const double cz = std::sqrt(m[0][0] * m[0][0] + m[2][0] * m[2][0]);
-  const double sz = -m[1][0];
-  const double z = std::atan2(sz, cz);
-  const double y = cz < 1e-6 ? 0.0 : std::atan2(m[2][0], m[0][0]);
-  const double h = std::sqrt(sz * sz + cz * cz);
-  const double s = sz / h, c = cz / h, sy = cz < 1e-6 ? 0.0 : m[2][0] / cz, cy = cz < 1e-6 ? 1.0 : m[0][0] / cz;
-  const double cos_x = m[0][1] * s * cy + m[1][1] * c + m[2][1] * s * sy;
-  const double sin_x = m[0][2] * s * cy + m[1][2] * c + m[2][2] * s * sy;
-  return {std::atan2(sin_x, cos_x), y, z};
-}
+// limit_angles in double (components/euler.h): the search compares against limits at bisection resolution.
+dvec3 euler_angles(const dmat3& m) { return limit_angles(m); }
 
 dmat3 rotation_from_angles(const dvec3& a) {
   const double sx = std::sin(a.x), cx = std::cos(a.x), sy = std::sin(a.y), cy = std::cos(a.y);

@@ -93,6 +93,37 @@ struct GaitRef {
   float& leg(int l, std::uint32_t c) const { return base[(kGaitLegs + l * kLegFloats + c) * stride + i]; }
 };
 
+// Path distance of the footprint a swinging foot lands on: where the pelvis will be at heel strike, `strike_in`
+// seconds from a pelvis at `distance`, plus the footprint lead.
+float landing_distance(float distance, float strike_in, const GaitParameters& gp, const GaitStyle& style) {
+  return distance + gp.speed * strike_in + style.footprint_lead * gp.step_length;
+}
+
+// A leg's planted footprint and the swing it starts at toe-off, written where walk_one and start_walking need them.
+void plant_foot(const GaitRef& g, int leg, const glm::vec3& position, float heading, float distance) {
+  g.leg(leg, kLegPlantX) = position.x;
+  g.leg(leg, kLegPlantY) = position.y;
+  g.leg(leg, kLegPlantZ) = position.z;
+  g.leg(leg, kLegPlantHeading) = heading;
+  g.leg(leg, kLegPlantDistance) = distance;
+  g.leg(leg, kLegSwinging) = 0.0f;
+}
+
+void begin_swing(const GaitRef& g, int leg, const glm::vec3& from, float from_heading, float from_pitch,
+                 const glm::vec3& to, float to_heading, float to_distance) {
+  g.leg(leg, kLegFromX) = from.x;
+  g.leg(leg, kLegFromY) = from.y;
+  g.leg(leg, kLegFromZ) = from.z;
+  g.leg(leg, kLegFromHeading) = from_heading;
+  g.leg(leg, kLegFromPitch) = from_pitch;
+  g.leg(leg, kLegToX) = to.x;
+  g.leg(leg, kLegToY) = to.y;
+  g.leg(leg, kLegToZ) = to.z;
+  g.leg(leg, kLegToHeading) = to_heading;
+  g.leg(leg, kLegToDistance) = to_distance;
+  g.leg(leg, kLegSwinging) = 1.0f;
+}
+
 void write_quat(const WalkerLanes& lanes, std::int32_t joint, std::size_t i, const glm::quat& q) {
   if (joint < 0) return;
   const std::size_t s = lanes.stride;
@@ -200,34 +231,19 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
   float toe_pitch[2] = {0.0f, 0.0f};
   for (int leg = 0; leg < 2; ++leg) {
     const float psi = frac(phase - 0.5f * static_cast<float>(leg));
-    float& swinging = g.leg(leg, kLegSwinging);
-    if (swinging > 0.5f && psi < 0.5f) {
+    const bool swinging = g.leg(leg, kLegSwinging) > 0.5f;
+    if (swinging && psi < 0.5f) {
       // Heel strike (the leg's phase wrapped): the swing target becomes the planted footprint.
-      g.leg(leg, kLegPlantX) = g.leg(leg, kLegToX);
-      g.leg(leg, kLegPlantY) = g.leg(leg, kLegToY);
-      g.leg(leg, kLegPlantZ) = g.leg(leg, kLegToZ);
-      g.leg(leg, kLegPlantHeading) = g.leg(leg, kLegToHeading);
-      g.leg(leg, kLegPlantDistance) = g.leg(leg, kLegToDistance);
-      swinging = 0.0f;
-    } else if (swinging < 0.5f && psi >= sf) {
+      plant_foot(g, leg, {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)}, g.leg(leg, kLegToHeading),
+                 g.leg(leg, kLegToDistance));
+    } else if (!swinging && psi >= sf) {
       // Toe-off: leave from the rolled stance pose; aim where the pelvis will be at heel strike plus the lead.
       const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), 1.0f, scale, style, &p);
-      const float strike_in = (1.0f - psi) * gp.cycle_time;
-      const float d_to = g[kGaitDistance] + gp.speed * strike_in + style.footprint_lead * gp.step_length;
+      const float d_to = landing_distance(g[kGaitDistance], (1.0f - psi) * gp.cycle_time, gp, style);
       const Pose2 to = footprint(rig, path, d_to, leg, scale);
-      g.leg(leg, kLegFromX) = from.position.x;
-      g.leg(leg, kLegFromY) = from.position.y;
-      g.leg(leg, kLegFromZ) = from.position.z;
-      g.leg(leg, kLegFromHeading) = g.leg(leg, kLegPlantHeading);
-      g.leg(leg, kLegFromPitch) = p;
-      g.leg(leg, kLegToX) = to.position.x;
-      g.leg(leg, kLegToY) = to.position.y;
-      g.leg(leg, kLegToZ) = to.position.z;
-      g.leg(leg, kLegToHeading) = to.heading;
-      g.leg(leg, kLegToDistance) = d_to;
-      swinging = 1.0f;
+      begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading, d_to);
     }
   }
   // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
@@ -264,11 +280,8 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
       lp.plant_heading = g.leg(leg, kLegPlantHeading);
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, lp.plant, lp.plant_heading, 1.0f, scale, style, &p);
-      const float toe_off_in = std::max(sf - lp.psi, 0.0f) * gp.cycle_time;
-      const Pose2 to = footprint(rig, path,
-                                 g[kGaitDistance] + gp.speed * (toe_off_in + (1.0f - sf) * gp.cycle_time) +
-                                     style.footprint_lead * gp.step_length,
-                                 leg, scale);
+      const float strike_in = (std::max(sf - lp.psi, 0.0f) + 1.0f - sf) * gp.cycle_time;
+      const Pose2 to = footprint(rig, path, landing_distance(g[kGaitDistance], strike_in, gp, style), leg, scale);
       lp.swing = make_swing(from.position, lp.plant_heading, p, to.position, to.heading);
     }
   }
@@ -455,28 +468,13 @@ void start_walking(const LocomotionRig& rig, std::span<const CardinalSpline> pat
     // The footprint of the last heel strike, psi cycles ago.
     const float d_plant = s - gp.speed * psi * gp.cycle_time + lead;
     const Pose2 plant = footprint(rig, path, d_plant, leg, scale);
-    g.leg(leg, kLegPlantX) = plant.position.x;
-    g.leg(leg, kLegPlantY) = plant.position.y;
-    g.leg(leg, kLegPlantZ) = plant.position.z;
-    g.leg(leg, kLegPlantHeading) = plant.heading;
-    g.leg(leg, kLegPlantDistance) = d_plant;
-    g.leg(leg, kLegSwinging) = 0.0f;
+    plant_foot(g, leg, plant.position, plant.heading, d_plant);
     if (psi >= sf) {
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, plant.position, plant.heading, 1.0f, scale, style, &p);
-      const float d_to = s + gp.speed * (1.0f - psi) * gp.cycle_time + lead;
+      const float d_to = landing_distance(s, (1.0f - psi) * gp.cycle_time, gp, style);
       const Pose2 to = footprint(rig, path, d_to, leg, scale);
-      g.leg(leg, kLegFromX) = from.position.x;
-      g.leg(leg, kLegFromY) = from.position.y;
-      g.leg(leg, kLegFromZ) = from.position.z;
-      g.leg(leg, kLegFromHeading) = plant.heading;
-      g.leg(leg, kLegFromPitch) = p;
-      g.leg(leg, kLegToX) = to.position.x;
-      g.leg(leg, kLegToY) = to.position.y;
-      g.leg(leg, kLegToZ) = to.position.z;
-      g.leg(leg, kLegToHeading) = to.heading;
-      g.leg(leg, kLegToDistance) = d_to;
-      g.leg(leg, kLegSwinging) = 1.0f;
+      begin_swing(g, leg, from.position, plant.heading, p, to.position, to.heading, d_to);
     }
   }
   // No strike seen yet: a limit far in the past never binds; the prediction of the next strike does.
