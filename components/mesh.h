@@ -1,0 +1,56 @@
+#pragma once
+// Mesh: a rest-pose skin in humanoid space (metres, H-Anim axes), split into named parts, and its skin binding.
+// Immutable rig data, built once by generators, importers and binders (rig/, io/), shared by every walker.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+namespace strata {
+
+struct Mesh {
+  std::string name;
+  std::vector<glm::vec3> positions;      // rest positions
+  std::vector<glm::vec3> normals;        // unit, per vertex (may be empty until compute_normals)
+  std::vector<glm::vec2> uvs;            // optional, per vertex
+  std::vector<std::uint32_t> triangles;  // 3 indices per triangle, counter-clockwise seen from outside
+  std::vector<std::uint16_t> part;       // per vertex: index into part_names
+  std::vector<std::string> part_names;
+
+  std::size_t vertex_count() const { return positions.size(); }
+  std::size_t triangle_count() const { return triangles.size() / 3; }
+};
+
+// The paper's 53 skin parts (Poser naming): hip, abdomen, chest, neck, head, lEye, rEye, and per side (l/r)
+// Collar, Shldr, ForeArm, Hand, Thigh, Shin, Foot, Toe, and Thumb1-3, Index1-3, Mid1-3, Ring1-3, Pinky1-3.
+const std::vector<std::string>& paper_part_names();
+
+// Up to four joint influences per vertex; weights sum to 1, unused slots have weight 0 and joint 0.
+inline constexpr int kMaxInfluences = 4;
+struct SkinBinding {
+  std::vector<std::array<std::int16_t, kMaxInfluences>> joints;
+  std::vector<std::array<float, kMaxInfluences>> weights;
+
+  std::size_t vertex_count() const { return joints.size(); }
+  // Influences with weight > 0 of vertex v.
+  int influence_count(std::size_t v) const {
+    int n = 0;
+    for (float w : weights[v]) n += w > 0.0f;
+    return n;
+  }
+};
+
+// Area-weighted vertex normals from the triangles (degenerate triangles contribute nothing; a vertex with no
+// usable triangle gets +Y so no NaN leaves).
+void compute_normals(Mesh& mesh);
+
+// Checks a mesh a loader produced and throws LoadError "SOURCE: <what>: reason" naming the first problem:
+// index out of range, non-finite coordinate, per-vertex arrays of the wrong length, empty mesh, part index out of
+// range. `source` names the file (and group) for the message.
+void validate_mesh(const Mesh& mesh, std::string_view source);
+
+}  // namespace strata
