@@ -343,6 +343,65 @@ struct SkeletonRenderer::Impl {
   // Kept between frames so steady-state rendering does not allocate.
   std::vector<InstanceRows> bone_instances, joint_instances;
 
+  // Bodies: positions and normals re-specified per frame (orphaning, as for instances); the index buffer only
+  // when the topology changes. One identity instance lets the mesh program draw them unchanged.
+  GLuint body_vao = 0, body_positions = 0, body_normals = 0, body_indices = 0, body_instance = 0;
+  const std::uint32_t* body_topology = nullptr;
+  std::size_t body_index_count = 0, body_vertex_count = 0;
+  std::vector<GLsizei> body_counts;
+  std::vector<const void*> body_offsets;
+  std::vector<GLint> body_base_vertices;
+
+  void create_body_vao() {
+    glCreateBuffers(1, &body_positions);
+    glCreateBuffers(1, &body_normals);
+    glCreateBuffers(1, &body_indices);
+    glCreateBuffers(1, &body_instance);
+    const InstanceRows identity = to_rows(glm::mat4(1.0f));
+    glNamedBufferStorage(body_instance, sizeof identity, &identity, 0);
+    glCreateVertexArrays(1, &body_vao);
+    glVertexArrayVertexBuffer(body_vao, 0, body_positions, 0, sizeof(glm::vec3));
+    glVertexArrayVertexBuffer(body_vao, 1, body_instance, 0, sizeof(InstanceRows));
+    glVertexArrayVertexBuffer(body_vao, 2, body_normals, 0, sizeof(glm::vec3));
+    glVertexArrayBindingDivisor(body_vao, 1, 1);
+    glVertexArrayElementBuffer(body_vao, body_indices);
+    auto attribute = [&](GLuint location, GLuint binding, GLint size, GLuint offset) {
+      glEnableVertexArrayAttrib(body_vao, location);
+      glVertexArrayAttribFormat(body_vao, location, size, GL_FLOAT, GL_FALSE, offset);
+      glVertexArrayAttribBinding(body_vao, location, binding);
+    };
+    attribute(0, 0, 3, 0);
+    attribute(1, 2, 3, 0);
+    for (GLuint i = 0; i < 3; ++i) attribute(2 + i, 1, 4, static_cast<GLuint>(i * sizeof(glm::vec4)));
+  }
+
+  void draw_bodies(const BodyDrawInput& b, GLuint program, GLint color_location) {
+    if (b.walker_count == 0 || b.triangles.empty()) return;
+    if (b.triangles.data() != body_topology || b.triangles.size() != body_index_count ||
+        b.vertex_count != body_vertex_count) {
+      glNamedBufferData(body_indices, static_cast<GLsizeiptr>(b.triangles.size() * sizeof(std::uint32_t)),
+                        b.triangles.data(), GL_STATIC_DRAW);
+      body_topology = b.triangles.data();
+      body_index_count = b.triangles.size();
+      body_vertex_count = b.vertex_count;
+    }
+    const std::size_t n = b.walker_count * b.vertex_count;
+    glNamedBufferData(body_positions, static_cast<GLsizeiptr>(n * sizeof(glm::vec3)), b.positions.data(),
+                      GL_STREAM_DRAW);
+    glNamedBufferData(body_normals, static_cast<GLsizeiptr>(n * sizeof(glm::vec3)), b.normals.data(),
+                      GL_STREAM_DRAW);
+    // One multi-draw: the shared index list once per walker, offset by its first vertex.
+    body_counts.assign(b.walker_count, static_cast<GLsizei>(b.triangles.size()));
+    body_offsets.assign(b.walker_count, nullptr);
+    body_base_vertices.resize(b.walker_count);
+    for (std::size_t w = 0; w < b.walker_count; ++w)
+      body_base_vertices[w] = static_cast<GLint>(w * b.vertex_count);
+    glProgramUniform3fv(program, color_location, 1, glm::value_ptr(options.skin_color));
+    glBindVertexArray(body_vao);
+    glMultiDrawElementsBaseVertex(GL_TRIANGLES, body_counts.data(), GL_UNSIGNED_INT, body_offsets.data(),
+                                  static_cast<GLsizei>(b.walker_count), body_base_vertices.data());
+  }
+
   void create_targets() {
     glCreateRenderbuffers(1, &msaa_color);
     glCreateRenderbuffers(1, &msaa_depth);
@@ -384,6 +443,10 @@ struct SkeletonRenderer::Impl {
     destroy_targets();
     destroy_mesh(bone);
     destroy_mesh(joint);
+    glDeleteVertexArrays(1, &body_vao);
+    const GLuint body_buffers[] = {body_positions, body_normals, body_indices, body_instance};
+    glDeleteBuffers(4, body_buffers);
+    body_vao = body_positions = body_normals = body_indices = body_instance = 0;
     glDeleteVertexArrays(1, &ground_vao);
     glDeleteProgram(mesh_program);
     glDeleteProgram(ground_program);
@@ -475,6 +538,7 @@ SkeletonRenderer::SkeletonRenderer(int width, int height, SkeletonRenderOptions 
     r.ground_program = link_program(kGroundVertexShader, kGroundFragmentShader, "ground");
     r.bone = upload_mesh(make_bone_mesh());
     r.joint = upload_mesh(make_sphere_mesh());
+    r.create_body_vao();
     glCreateVertexArrays(1, &r.ground_vao);
     r.create_targets();
   } catch (...) {
@@ -502,8 +566,23 @@ void SkeletonRenderer::resize(int width, int height) {
   impl_->create_targets();
 }
 
-void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection) {
+void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
+                              const BodyDrawInput* bodies) {
   Impl& r = *impl_;
+  if (bodies) {
+    const std::size_t n = bodies->walker_count * bodies->vertex_count;
+    if (bodies->positions.size() < n || bodies->normals.size() < n || bodies->triangles.size() % 3 != 0)
+      throw std::invalid_argument("skeleton renderer: body positions/normals/triangles do not match " +
+                                  std::to_string(bodies->walker_count) + " walkers of " +
+                                  std::to_string(bodies->vertex_count) + " vertices");
+    // Indices are checked when the topology changes (they are uploaded then), not every frame.
+    if (bodies->triangles.data() != r.body_topology || bodies->triangles.size() != r.body_index_count ||
+        bodies->vertex_count != r.body_vertex_count)
+      for (std::uint32_t index : bodies->triangles)
+        if (index >= bodies->vertex_count)
+          throw std::invalid_argument("skeleton renderer: body triangle index " + std::to_string(index) +
+                                      " out of range");
+  }
   if (input.walker_count > 0) {
     if (!input.skeleton) throw std::invalid_argument("skeleton renderer: walkers given without a skeleton");
     if (input.skeleton->parents.size() != input.skeleton->joint_count())
@@ -562,8 +641,11 @@ void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& v
     glDrawElementsInstanced(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_SHORT, nullptr,
                             static_cast<GLsizei>(instances.size()));
   };
-  draw(r.bone, r.bone_instances, o.bone_color);
-  draw(r.joint, r.joint_instances, o.joint_color);
+  if (o.draw_skeleton) {
+    draw(r.bone, r.bone_instances, o.bone_color);
+    draw(r.joint, r.joint_instances, o.joint_color);
+  }
+  if (bodies) r.draw_bodies(*bodies, p, color_location);
   glBindVertexArray(0);
 
   glBlitNamedFramebuffer(r.msaa_fbo, r.resolve_fbo, 0, 0, r.width, r.height, 0, 0, r.width, r.height,

@@ -25,13 +25,25 @@ struct SkeletonDrawInput {
   std::size_t walker_count = 0;
 };
 
+// Skinned bodies: per-walker deformed vertices already in world space, sharing one triangle list (every walker
+// of a draw uses the same mesh level). Drawn lit in the skin colour.
+struct BodyDrawInput {
+  std::span<const std::uint32_t> triangles;
+  std::span<const glm::vec3> positions;  // walker-major: vertex v of walker w at [w * vertex_count + v]
+  std::span<const glm::vec3> normals;    // same layout, unit length
+  std::size_t vertex_count = 0;
+  std::size_t walker_count = 0;
+};
+
 struct SkeletonRenderOptions {
   bool draw_ground = true;
+  bool draw_skeleton = true;           // bones and joints (drawn inside bodies when both are on)
   float bone_radius = 0.025f;          // metres at the parent end of a bone
   float joint_radius = 0.03f;          // metres
   glm::vec4 clear_color{0.62f, 0.70f, 0.80f, 1.0f};
   glm::vec3 bone_color{0.92f, 0.86f, 0.74f};
   glm::vec3 joint_color{0.80f, 0.25f, 0.20f};
+  glm::vec3 skin_color{0.80f, 0.62f, 0.52f};
   glm::vec3 ground_color{0.50f, 0.52f, 0.49f};
 };
 
@@ -55,8 +67,11 @@ class SkeletonRenderer {
   void resize(int width, int height);
   SkeletonRenderOptions& options();
 
-  // Draws one frame into the FBO. Waits for nothing; read_rgba() or blit_to_default_framebuffer() finish it.
-  void render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection);
+  // Draws one frame into the FBO: ground, skeletons (when options().draw_skeleton) and, when given, bodies.
+  // Waits for nothing; read_rgba() or blit_to_default_framebuffer() finish it. Throws std::invalid_argument when
+  // the inputs' sizes disagree.
+  void render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
+              const BodyDrawInput* bodies = nullptr);
   // RGBA8 pixels, rows top to bottom (image order), width*height*4 bytes.
   void read_rgba(std::vector<std::uint8_t>& out) const;
   // Copies the FBO to framebuffer 0 (a window), scaled to the given size.

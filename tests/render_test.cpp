@@ -300,6 +300,63 @@ TEST_F(RenderTest, GridOfWalkersEachDrawnInItsOwnBox) {
   for (std::size_t i = 0; i < lit.size(); ++i) EXPECT_GT(lit[i], 80) << "walker " << i;
 }
 
+// A closed box as a body mesh: 24 vertices (flat faces), 12 counter-clockwise triangles.
+void add_box(const glm::vec3& lo, const glm::vec3& hi, std::vector<glm::vec3>& positions, std::vector<glm::vec3>& normals,
+             std::vector<std::uint32_t>* triangles) {
+  const glm::vec3 c = 0.5f * (lo + hi), h = 0.5f * (hi - lo);
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {-1.0f, 1.0f}) {
+      glm::vec3 n(0.0f);
+      n[axis] = sign;
+      const glm::vec3 u = glm::vec3(n.y, n.z, n.x), v = glm::cross(n, u);  // u x v = n: counter-clockwise
+      const auto base = static_cast<std::uint32_t>(positions.size());
+      for (auto [a, b] : {std::pair{-1.0f, -1.0f}, std::pair{1.0f, -1.0f}, std::pair{1.0f, 1.0f}, std::pair{-1.0f, 1.0f}}) {
+        positions.push_back(c + h * (n + a * u + b * v));
+        normals.push_back(n);
+      }
+      if (triangles) triangles->insert(triangles->end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    }
+}
+
+TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
+  std::vector<glm::vec3> positions, normals;
+  std::vector<std::uint32_t> triangles;
+  add_box({-0.8f, 0.5f, -0.2f}, {-0.4f, 1.5f, 0.2f}, positions, normals, &triangles);
+  const std::size_t per_walker = positions.size();
+  add_box({0.4f, 0.3f, -0.2f}, {0.8f, 1.2f, 0.2f}, positions, normals, nullptr);  // walker 2, same topology
+  renderer_->options().draw_ground = false;
+  renderer_->options().draw_skeleton = false;
+  BodyDrawInput bodies{triangles, positions, normals, per_walker, 2};
+  const OrbitCamera camera = figure_camera();
+  renderer_->render(SkeletonDrawInput{}, camera.view(), camera.projection(kAspect), &bodies);
+  std::vector<std::uint8_t> image;
+  renderer_->read_rgba(image);
+  const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
+  SkeletonRenderOptions no_margin = options_;
+  no_margin.bone_radius = no_margin.joint_radius = 0.0f;
+  const Rect a = projected_bounds({positions.begin(), positions.begin() + 24}, view, projection, no_margin);
+  const Rect b = projected_bounds({positions.begin() + 24, positions.end()}, view, projection, no_margin);
+  int lit = 0, outside = 0;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      if (is_background(image, x, y)) continue;
+      ++lit;
+      outside += !a.contains_pixel(x, y) && !b.contains_pixel(x, y);
+    }
+  EXPECT_EQ(outside, 0);
+  EXPECT_GT(lit, 500);
+  for (const glm::vec3& centre : {glm::vec3(-0.6f, 1.0f, 0.0f), glm::vec3(0.6f, 0.75f, 0.0f)}) {
+    const Pixel p = project(centre, view, projection);
+    const Rgba c = pixel_at(image, static_cast<int>(p.x), static_cast<int>(p.y));
+    EXPECT_FALSE(is_background(image, static_cast<int>(p.x), static_cast<int>(p.y)));
+    EXPECT_GT(c[0], c[2]) << "skin is warmer than blue";
+  }
+  std::vector<std::uint32_t> bad = triangles;
+  bad[5] = static_cast<std::uint32_t>(per_walker);
+  BodyDrawInput broken{bad, positions, normals, per_walker, 2};
+  EXPECT_THROW(renderer_->render(SkeletonDrawInput{}, view, projection, &broken), std::invalid_argument);
+}
+
 TEST_F(RenderTest, SameInputGivesIdenticalPixels) {
   const OrbitCamera camera = figure_camera();
   renderer_->options().draw_ground = true;  // include the grid shader's derivatives
