@@ -1,7 +1,7 @@
 #pragma once
 // Rig: the immutable data every walker of one body shares (stored once, referenced by id from walker tables).
-// This rig is a skeleton plus its animation clips; later layers add rest meshes per level, the skin
-// binding and action lines here, never per walker.
+// A skeleton, its animation clips and optionally its body (rest meshes per level with their skin binding);
+// later layers add action lines here, never per walker.
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "components/animation_clip.h"
+#include "components/body.h"
 #include "components/skeleton.h"
 
 namespace strata {
@@ -17,6 +18,7 @@ struct Rig {
   std::string name;
   Skeleton skeleton;
   std::vector<AnimationClip> clips;
+  std::shared_ptr<const Body> body;  // null: a skeleton only
 };
 
 using RigId = std::uint32_t;

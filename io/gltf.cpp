@@ -1,0 +1,620 @@
+#include "io/gltf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
+
+// tinygltf is linked as Debian's shared library: including the header declares the API only (defining
+// TINYGLTF_IMPLEMENTATION here would compile a second copy of the library into ours).
+#include <tiny_gltf.h>
+
+namespace strata {
+namespace {
+
+struct Trs {
+  glm::vec3 translation{0.0f};
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+  glm::vec3 scale{1.0f};
+  glm::mat4 matrix() const {
+    return glm::translate(glm::mat4(1.0f), translation) * glm::mat4_cast(rotation) *
+           glm::scale(glm::mat4(1.0f), scale);
+  }
+};
+
+// Image decoding is irrelevant to a skin and costs time (CesiumMan embeds a JPEG): accept every image undecoded.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+  return true;
+}
+
+class GltfReader {
+ public:
+  explicit GltfReader(const std::filesystem::path& path) : path_(path), name_(path.string()) {}
+
+  ImportedBody read() {
+    load_model();
+    compute_parents();
+    default_globals_ = globals_at_default();
+    const int node = find_skinned_node();
+    const tinygltf::Node& skinned = model_.nodes[node];
+    read_skin(skinned.skin);
+    build_skeleton();
+    ImportedBody body;
+    read_mesh(model_.meshes[skinned.mesh], body);
+    if (!model_.animations.empty()) bake_animation(model_.animations[0], body);
+    body.skeleton = skeleton_;
+    validate_mesh(body.mesh, name_);
+    return body;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what, const std::string& reason) const {
+    throw LoadError(name_ + ": " + what + ": " + reason);
+  }
+
+  void load_model() {
+    std::ifstream in(path_, std::ios::binary);
+    if (!in) throw LoadError(name_ + ": cannot open file");
+    char magic[4] = {};
+    in.read(magic, 4);
+    const bool binary = in.gcount() == 4 && std::memcmp(magic, "glTF", 4) == 0;
+    in.close();
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(skip_image, nullptr);
+    std::string err, warn;
+    const bool ok = binary ? loader.LoadBinaryFromFile(&model_, &err, &warn, path_.string())
+                           : loader.LoadASCIIFromFile(&model_, &err, &warn, path_.string());
+    if (!ok) {
+      std::replace(err.begin(), err.end(), '\n', ' ');
+      throw LoadError(name_ + ": not a readable glTF 2.0 file: " + (err.empty() ? "unknown error" : err));
+    }
+  }
+
+  // --- accessors ---------------------------------------------------------------------------------------------
+  struct View {
+    const unsigned char* data = nullptr;
+    std::size_t count = 0, stride = 0;
+    int component_type = 0, components = 0;
+    bool normalized = false;
+  };
+
+  View view(int index, int expected_type, const std::string& what) const {
+    const std::string where = "accessor " + std::to_string(index) + " (" + what + ")";
+    if (index < 0 || static_cast<std::size_t>(index) >= model_.accessors.size()) fail(where, "no such accessor");
+    const tinygltf::Accessor& a = model_.accessors[index];
+    if (a.sparse.isSparse) fail(where, "sparse accessors are not supported");
+    if (expected_type != 0 && a.type != expected_type)
+      fail(where, "type " + std::to_string(a.type) + ", expected " + std::to_string(expected_type));
+    if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= model_.bufferViews.size())
+      fail(where, "buffer view " + std::to_string(a.bufferView) + " does not exist");
+    const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
+    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= model_.buffers.size())
+      fail(where, "buffer " + std::to_string(bv.buffer) + " does not exist");
+    const std::vector<unsigned char>& buffer = model_.buffers[bv.buffer].data;
+    View v;
+    v.count = a.count;
+    v.component_type = a.componentType;
+    v.components = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
+    v.normalized = a.normalized;
+    const int component_size = tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType));
+    if (v.components <= 0 || component_size <= 0) fail(where, "unknown type or component type");
+    const std::size_t element = static_cast<std::size_t>(v.components) * component_size;
+    v.stride = bv.byteStride ? bv.byteStride : element;
+    const std::size_t needed = a.count == 0 ? 0 : a.byteOffset + (a.count - 1) * v.stride + element;
+    if (bv.byteOffset + bv.byteLength > buffer.size() || needed > bv.byteLength)
+      fail(where, "reads " + std::to_string(needed) + " bytes of a " + std::to_string(bv.byteLength) +
+                      "-byte buffer view (out of range)");
+    v.data = buffer.data() + bv.byteOffset + a.byteOffset;
+    return v;
+  }
+
+  static double component(const View& v, std::size_t i, int c) {
+    const unsigned char* p = v.data + i * v.stride;
+    auto load = [&](auto type_tag) {
+      using T = decltype(type_tag);
+      T value;
+      std::memcpy(&value, p + c * sizeof(T), sizeof(T));
+      return value;
+    };
+    switch (v.component_type) {
+      case TINYGLTF_COMPONENT_TYPE_FLOAT: return load(float{});
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return v.normalized ? load(std::uint8_t{}) / 255.0 : load(std::uint8_t{});
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+        return v.normalized ? load(std::uint16_t{}) / 65535.0 : load(std::uint16_t{});
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return load(std::uint32_t{});
+      case TINYGLTF_COMPONENT_TYPE_BYTE:
+        return v.normalized ? std::max(load(std::int8_t{}) / 127.0, -1.0) : load(std::int8_t{});
+      case TINYGLTF_COMPONENT_TYPE_SHORT:
+        return v.normalized ? std::max(load(std::int16_t{}) / 32767.0, -1.0) : load(std::int16_t{});
+      default: return load(double{});
+    }
+  }
+
+  // count x components floats, every one finite.
+  std::vector<float> floats(int index, int expected_type, const std::string& what) const {
+    const View v = view(index, expected_type, what);
+    std::vector<float> out(v.count * v.components);
+    for (std::size_t i = 0; i < v.count; ++i)
+      for (int c = 0; c < v.components; ++c) {
+        const double x = component(v, i, c);
+        if (!std::isfinite(x))
+          fail("accessor " + std::to_string(index) + " (" + what + ")",
+               "element " + std::to_string(i) + " is not finite");
+        out[i * v.components + c] = static_cast<float>(x);
+      }
+    return out;
+  }
+
+  std::vector<std::uint32_t> integers(int index, int expected_type, const std::string& what) const {
+    const View v = view(index, expected_type, what);
+    if (v.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+        v.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        v.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+      fail("accessor " + std::to_string(index) + " (" + what + ")", "expected unsigned integer components");
+    View raw = v;
+    raw.normalized = false;
+    std::vector<std::uint32_t> out(v.count * v.components);
+    for (std::size_t i = 0; i < v.count; ++i)
+      for (int c = 0; c < v.components; ++c)
+        out[i * v.components + c] = static_cast<std::uint32_t>(component(raw, i, c));
+    return out;
+  }
+
+  // --- nodes -------------------------------------------------------------------------------------------------
+  void compute_parents() {
+    const std::size_t n = model_.nodes.size();
+    parent_.assign(n, -1);
+    default_trs_.resize(n);
+    uses_matrix_.assign(n, false);
+    for (std::size_t i = 0; i < n; ++i) {
+      const tinygltf::Node& node = model_.nodes[i];
+      for (int child : node.children) {
+        if (child < 0 || static_cast<std::size_t>(child) >= n)
+          fail("node " + std::to_string(i), "child " + std::to_string(child) + " does not exist");
+        if (parent_[child] >= 0)
+          fail("node " + std::to_string(child), "has two parents (" + std::to_string(parent_[child]) + " and " +
+                                                    std::to_string(i) + ")");
+        parent_[child] = static_cast<int>(i);
+      }
+      Trs& trs = default_trs_[i];
+      auto finite = [&](const std::vector<double>& values, const char* field) {
+        for (double x : values)
+          if (!std::isfinite(x)) fail("node " + std::to_string(i), std::string(field) + " is not finite");
+      };
+      finite(node.matrix, "matrix");
+      finite(node.translation, "translation");
+      finite(node.rotation, "rotation");
+      finite(node.scale, "scale");
+      if (node.matrix.size() == 16) {
+        uses_matrix_[i] = true;
+        glm::dmat4 m;
+        std::copy(node.matrix.begin(), node.matrix.end(), glm::value_ptr(m));  // both column-major
+        matrix_[i] = glm::mat4(m);
+      }
+      if (node.translation.size() == 3)
+        trs.translation = glm::vec3(node.translation[0], node.translation[1], node.translation[2]);
+      if (node.rotation.size() == 4)
+        trs.rotation = glm::normalize(glm::quat(static_cast<float>(node.rotation[3]), static_cast<float>(node.rotation[0]),
+                                                static_cast<float>(node.rotation[1]), static_cast<float>(node.rotation[2])));
+      if (node.scale.size() == 3) trs.scale = glm::vec3(node.scale[0], node.scale[1], node.scale[2]);
+    }
+    // A cycle would make a node its own ancestor.
+    for (std::size_t i = 0; i < n; ++i) {
+      std::size_t steps = 0;
+      for (int p = parent_[i]; p >= 0; p = parent_[p])
+        if (++steps > n) fail("node " + std::to_string(i), "the node tree has a cycle");
+    }
+  }
+
+  // Globals of every node from per-node local matrices (parents resolved on demand).
+  std::vector<glm::mat4> globals(const std::vector<glm::mat4>& locals) const {
+    const std::size_t n = locals.size();
+    std::vector<glm::mat4> out(n);
+    std::vector<char> done(n, 0);
+    std::function<const glm::mat4&(int)> get = [&](int i) -> const glm::mat4& {
+      if (!done[i]) {
+        out[i] = parent_[i] >= 0 ? get(parent_[i]) * locals[i] : locals[i];
+        done[i] = 1;
+      }
+      return out[i];
+    };
+    for (std::size_t i = 0; i < n; ++i) get(static_cast<int>(i));
+    return out;
+  }
+
+  std::vector<glm::mat4> globals_at_default() const {
+    std::vector<glm::mat4> locals(model_.nodes.size());
+    for (std::size_t i = 0; i < locals.size(); ++i)
+      locals[i] = uses_matrix_[i] ? matrix_.at(i) : default_trs_[i].matrix();
+    return globals(locals);
+  }
+
+  int find_skinned_node() const {
+    auto skinned = [&](int i) { return model_.nodes[i].mesh >= 0 && model_.nodes[i].skin >= 0; };
+    std::vector<int> roots;
+    const int scene = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+    if (static_cast<std::size_t>(scene) < model_.scenes.size()) roots = model_.scenes[scene].nodes;
+    std::function<int(int)> search = [&](int i) {
+      if (i < 0 || static_cast<std::size_t>(i) >= model_.nodes.size()) return -1;
+      if (skinned(i)) return i;
+      for (int c : model_.nodes[i].children)
+        if (const int found = search(c); found >= 0) return found;
+      return -1;
+    };
+    for (int r : roots)
+      if (const int found = search(r); found >= 0) return found;
+    for (std::size_t i = 0; i < model_.nodes.size(); ++i)  // skinned node outside the scene: still usable
+      if (skinned(static_cast<int>(i))) return static_cast<int>(i);
+    throw LoadError(name_ + ": no skinned mesh (no node has both a mesh and a skin)");
+  }
+
+  void read_skin(int index) {
+    if (index < 0 || static_cast<std::size_t>(index) >= model_.skins.size())
+      fail("skin " + std::to_string(index), "does not exist");
+    const tinygltf::Skin& skin = model_.skins[index];
+    if (skin.joints.empty()) fail("skin " + std::to_string(index), "has no joints");
+    if (skin.joints.size() > 32767) fail("skin " + std::to_string(index), "has too many joints");
+    for (int j : skin.joints)
+      if (j < 0 || static_cast<std::size_t>(j) >= model_.nodes.size())
+        fail("skin " + std::to_string(index), "joint node " + std::to_string(j) + " does not exist");
+    skin_joints_ = skin.joints;
+    ibm_.assign(skin_joints_.size(), glm::mat4(1.0f));
+    if (skin.inverseBindMatrices >= 0) {
+      const std::vector<float> m = floats(skin.inverseBindMatrices, TINYGLTF_TYPE_MAT4, "inverseBindMatrices");
+      if (m.size() < 16 * ibm_.size())
+        fail("accessor " + std::to_string(skin.inverseBindMatrices),
+             "has " + std::to_string(m.size() / 16) + " matrices for " + std::to_string(ibm_.size()) + " joints");
+      for (std::size_t k = 0; k < ibm_.size(); ++k) ibm_[k] = glm::make_mat4(m.data() + 16 * k);
+    }
+  }
+
+  void build_skeleton() {
+    const std::size_t k_count = skin_joints_.size();
+    std::vector<int> skin_index_of_node(model_.nodes.size(), -1);
+    for (std::size_t k = 0; k < k_count; ++k) {
+      if (skin_index_of_node[skin_joints_[k]] >= 0)
+        fail("skin", "node " + std::to_string(skin_joints_[k]) + " is listed twice");
+      skin_index_of_node[skin_joints_[k]] = static_cast<int>(k);
+    }
+    // Parent in skin terms: the nearest ancestor node that is a joint of this skin.
+    std::vector<int> skin_parent(k_count, -1);
+    std::vector<std::vector<int>> children(k_count);
+    std::vector<int> roots;
+    for (std::size_t k = 0; k < k_count; ++k) {
+      for (int p = parent_[skin_joints_[k]]; p >= 0; p = parent_[p])
+        if (skin_index_of_node[p] >= 0) {
+          skin_parent[k] = skin_index_of_node[p];
+          break;
+        }
+      if (skin_parent[k] < 0)
+        roots.push_back(static_cast<int>(k));
+      else
+        children[skin_parent[k]].push_back(static_cast<int>(k));
+    }
+    const bool synthetic_root = roots.size() > 1;
+    Skeleton& s = skeleton_;
+    s.name = path_.stem().string();
+    s.source = name_;
+    s.naming = JointNaming::Mixed;
+    joint_of_skin_.assign(k_count, -1);
+    skin_of_joint_.clear();
+    auto add = [&](const std::string& name, int parent, glm::vec3 center, int skin_k) {
+      s.joint_names.push_back(name);
+      s.source_joint_names.push_back(name);
+      s.parents.push_back(parent);
+      s.centers.push_back(center);
+      s.limits.emplace_back();
+      s.stiffness.emplace_back(1.0f);
+      skin_of_joint_.push_back(skin_k);
+      return static_cast<int>(s.joint_names.size() - 1);
+    };
+    if (synthetic_root) add("skin_root", -1, glm::vec3(0.0f), -1);
+    std::function<void(int, int)> visit = [&](int k, int parent) {
+      const tinygltf::Node& node = model_.nodes[skin_joints_[k]];
+      const std::string name = node.name.empty() ? "joint_" + std::to_string(k) : node.name;
+      const int j = add(name, parent, glm::vec3(default_globals_[skin_joints_[k]][3]), k);
+      joint_of_skin_[k] = j;
+      for (int c : children[k]) visit(c, j);
+    };
+    for (int r : roots) visit(r, synthetic_root ? 0 : -1);
+  }
+
+  void read_mesh(const tinygltf::Mesh& gmesh, ImportedBody& body) {
+    struct Prim {
+      const tinygltf::Primitive* p;
+      std::size_t index;
+    };
+    std::vector<Prim> prims;
+    for (std::size_t i = 0; i < gmesh.primitives.size(); ++i) {
+      const tinygltf::Primitive& p = gmesh.primitives[i];
+      const auto& a = p.attributes;
+      if (p.mode != TINYGLTF_MODE_TRIANGLES || !a.count("POSITION") || !a.count("JOINTS_0") || !a.count("WEIGHTS_0")) {
+        body.warnings.push_back(name_ + ": primitive " + std::to_string(i) + " skipped (not skinned triangles)");
+        continue;
+      }
+      prims.push_back({&p, i});
+    }
+    if (prims.empty()) throw LoadError(name_ + ": no skinned mesh (no triangle primitive with JOINTS_0/WEIGHTS_0)");
+    bool all_normals = true, all_uvs = true;
+    for (const Prim& pr : prims) {
+      all_normals = all_normals && pr.p->attributes.count("NORMAL");
+      all_uvs = all_uvs && pr.p->attributes.count("TEXCOORD_0");
+    }
+
+    Mesh& mesh = body.mesh;
+    SkinBinding& skin = body.skin;
+    mesh.name = gmesh.name.empty() ? path_.stem().string() : gmesh.name;
+    std::vector<glm::vec3> bind_normals;
+    std::vector<glm::vec3> bind_positions;
+    for (const Prim& pr : prims) {
+      const auto& a = pr.p->attributes;
+      const std::size_t base = bind_positions.size();
+      const std::vector<float> pos = floats(a.at("POSITION"), TINYGLTF_TYPE_VEC3, "POSITION");
+      const std::size_t count = pos.size() / 3;
+      auto check_count = [&](std::size_t got, const char* what, int accessor) {
+        if (got != count)
+          fail("accessor " + std::to_string(accessor) + " (" + what + ")",
+               std::to_string(got) + " elements for " + std::to_string(count) + " vertices");
+      };
+      for (std::size_t i = 0; i < count; ++i) bind_positions.emplace_back(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
+      if (all_normals) {
+        const std::vector<float> nrm = floats(a.at("NORMAL"), TINYGLTF_TYPE_VEC3, "NORMAL");
+        check_count(nrm.size() / 3, "NORMAL", a.at("NORMAL"));
+        for (std::size_t i = 0; i < count; ++i) bind_normals.emplace_back(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]);
+      }
+      if (all_uvs) {
+        const std::vector<float> uv = floats(a.at("TEXCOORD_0"), TINYGLTF_TYPE_VEC2, "TEXCOORD_0");
+        check_count(uv.size() / 2, "TEXCOORD_0", a.at("TEXCOORD_0"));
+        for (std::size_t i = 0; i < count; ++i) mesh.uvs.emplace_back(uv[2 * i], uv[2 * i + 1]);
+      }
+      const std::vector<std::uint32_t> joints = integers(a.at("JOINTS_0"), TINYGLTF_TYPE_VEC4, "JOINTS_0");
+      check_count(joints.size() / 4, "JOINTS_0", a.at("JOINTS_0"));
+      const std::vector<float> weights = floats(a.at("WEIGHTS_0"), TINYGLTF_TYPE_VEC4, "WEIGHTS_0");
+      check_count(weights.size() / 4, "WEIGHTS_0", a.at("WEIGHTS_0"));
+      std::size_t renormalised = 0;
+      for (std::size_t i = 0; i < count; ++i) {
+        std::array<std::int16_t, kMaxInfluences> js{};
+        std::array<float, kMaxInfluences> ws{};
+        float sum = 0.0f;
+        for (int c = 0; c < 4; ++c) {
+          const float w = weights[4 * i + c];
+          if (w < 0.0f)
+            fail("accessor " + std::to_string(a.at("WEIGHTS_0")) + " (WEIGHTS_0)",
+                 "vertex " + std::to_string(i) + " has a negative weight");
+          if (w == 0.0f) continue;
+          const std::uint32_t k = joints[4 * i + c];
+          if (k >= skin_joints_.size())
+            fail("accessor " + std::to_string(a.at("JOINTS_0")) + " (JOINTS_0)",
+                 "vertex " + std::to_string(i) + " uses joint " + std::to_string(k) + " of a " +
+                     std::to_string(skin_joints_.size()) + "-joint skin");
+          js[c] = static_cast<std::int16_t>(joint_of_skin_[k]);
+          ws[c] = w;
+          sum += w;
+        }
+        if (sum <= 0.0f)
+          fail("accessor " + std::to_string(a.at("WEIGHTS_0")) + " (WEIGHTS_0)",
+               "vertex " + std::to_string(i) + " has no weight");
+        if (std::abs(sum - 1.0f) > 1e-3f) ++renormalised;
+        for (float& w : ws) w /= sum;
+        skin.joints.push_back(js);
+        skin.weights.push_back(ws);
+      }
+      if (renormalised)
+        body.warnings.push_back(name_ + ": primitive " + std::to_string(pr.index) + ": " +
+                                std::to_string(renormalised) + " vertices had weight sums off 1; normalised");
+
+      if (pr.p->indices >= 0) {
+        const std::vector<std::uint32_t> idx = integers(pr.p->indices, TINYGLTF_TYPE_SCALAR, "indices");
+        if (idx.size() % 3) fail("accessor " + std::to_string(pr.p->indices), "index count is not a multiple of 3");
+        for (std::uint32_t i : idx) {
+          if (i >= count)
+            fail("accessor " + std::to_string(pr.p->indices) + " (indices)",
+                 "index " + std::to_string(i) + " out of range (" + std::to_string(count) + " vertices)");
+          mesh.triangles.push_back(static_cast<std::uint32_t>(base + i));
+        }
+      } else {
+        for (std::size_t i = 0; i + 2 < count; i += 3)
+          for (int c = 0; c < 3; ++c) mesh.triangles.push_back(static_cast<std::uint32_t>(base + i + c));
+      }
+      mesh.part.insert(mesh.part.end(), count, static_cast<std::uint16_t>(mesh.part_names.size()));
+      mesh.part_names.push_back(prims.size() == 1 ? mesh.name : mesh.name + "_" + std::to_string(pr.index));
+    }
+
+    // The rest mesh is the default pose: v = sum_i w_i N_k IBM_k v_bind (per glTF the mesh node's own transform
+    // plays no part).
+    std::vector<glm::mat4> joint_matrix(skeleton_.joint_count(), glm::mat4(1.0f));
+    for (std::size_t j = 0; j < joint_matrix.size(); ++j)
+      if (skin_of_joint_[j] >= 0)
+        joint_matrix[j] = default_globals_[skin_joints_[skin_of_joint_[j]]] * ibm_[skin_of_joint_[j]];
+    mesh.positions.resize(bind_positions.size());
+    if (all_normals) mesh.normals.resize(bind_positions.size());
+    for (std::size_t v = 0; v < bind_positions.size(); ++v) {
+      glm::mat4 m(0.0f);
+      for (int c = 0; c < kMaxInfluences; ++c) m += skin.weights[v][c] * joint_matrix[skin.joints[v][c]];
+      mesh.positions[v] = glm::vec3(m * glm::vec4(bind_positions[v], 1.0f));
+      if (all_normals) {
+        const glm::vec3 n = glm::inverseTranspose(glm::mat3(m)) * bind_normals[v];
+        const float len = glm::length(n);
+        mesh.normals[v] = len > 1e-20f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
+      }
+    }
+    if (!all_normals) compute_normals(mesh);
+  }
+
+  // --- animation -----------------------------------------------------------------------------------------------
+  struct Channel {
+    int node = -1;
+    enum Path { Translation, Rotation, Scale } path = Translation;
+    enum Interp { Linear, Step, Cubic } interp = Linear;
+    std::vector<float> times, values;  // values: 3 or 4 per key (x3 for cubic: in-tangent, value, out-tangent)
+  };
+
+  glm::vec4 channel_value(const Channel& ch, float t) const {
+    const int width = ch.path == Channel::Rotation ? 4 : 3;
+    const int stride = ch.interp == Channel::Cubic ? 3 : 1;  // elements per key
+    auto element = [&](std::size_t key, int which) {  // which: 0 in-tangent, 1 value, 2 out-tangent (cubic)
+      const std::size_t e = key * stride + (ch.interp == Channel::Cubic ? which : 0);
+      glm::vec4 out(0.0f);
+      for (int c = 0; c < width; ++c) out[c] = ch.values[e * width + c];
+      return out;
+    };
+    const std::vector<float>& ts = ch.times;
+    if (t <= ts.front()) return element(0, 1);
+    if (t >= ts.back()) return element(ts.size() - 1, 1);
+    const std::size_t k = static_cast<std::size_t>(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin()) - 1;
+    const float dt = ts[k + 1] - ts[k];
+    const float s = dt > 0.0f ? (t - ts[k]) / dt : 0.0f;
+    if (ch.interp == Channel::Step) return element(k, 1);
+    if (ch.interp == Channel::Cubic) {
+      const float s2 = s * s, s3 = s2 * s;
+      return (2 * s3 - 3 * s2 + 1) * element(k, 1) + (s3 - 2 * s2 + s) * dt * element(k, 2) +
+             (-2 * s3 + 3 * s2) * element(k + 1, 1) + (s3 - s2) * dt * element(k + 1, 0);
+    }
+    const glm::vec4 a = element(k, 1), b = element(k + 1, 1);
+    if (ch.path != Channel::Rotation) return a + s * (b - a);
+    const glm::quat q = glm::slerp(glm::quat(a.w, a.x, a.y, a.z), glm::quat(b.w, b.x, b.y, b.z), s);
+    return glm::vec4(q.x, q.y, q.z, q.w);
+  }
+
+  void bake_animation(const tinygltf::Animation& anim, ImportedBody& body) {
+    std::vector<Channel> channels;
+    for (std::size_t c = 0; c < anim.channels.size(); ++c) {
+      const tinygltf::AnimationChannel& gc = anim.channels[c];
+      const std::string where = "animation channel " + std::to_string(c);
+      Channel ch;
+      if (gc.target_path == "translation") ch.path = Channel::Translation;
+      else if (gc.target_path == "rotation") ch.path = Channel::Rotation;
+      else if (gc.target_path == "scale") ch.path = Channel::Scale;
+      else continue;  // morph target weights do not move joints
+      if (gc.target_node < 0 || static_cast<std::size_t>(gc.target_node) >= model_.nodes.size())
+        fail(where, "target node " + std::to_string(gc.target_node) + " does not exist");
+      if (gc.sampler < 0 || static_cast<std::size_t>(gc.sampler) >= anim.samplers.size())
+        fail(where, "sampler " + std::to_string(gc.sampler) + " does not exist");
+      const tinygltf::AnimationSampler& sampler = anim.samplers[gc.sampler];
+      ch.node = gc.target_node;
+      ch.interp = sampler.interpolation == "STEP"          ? Channel::Step
+                  : sampler.interpolation == "CUBICSPLINE" ? Channel::Cubic
+                                                           : Channel::Linear;
+      ch.times = floats(sampler.input, TINYGLTF_TYPE_SCALAR, "animation input");
+      const int width = ch.path == Channel::Rotation ? 4 : 3;
+      ch.values = floats(sampler.output, width == 4 ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, "animation output");
+      if (ch.times.empty()) fail("accessor " + std::to_string(sampler.input), "animation input has no keys");
+      for (std::size_t k = 1; k < ch.times.size(); ++k)
+        if (!(ch.times[k] > ch.times[k - 1]))
+          fail("accessor " + std::to_string(sampler.input), "key times are not strictly increasing");
+      const std::size_t expected = ch.times.size() * width * (ch.interp == Channel::Cubic ? 3 : 1);
+      if (ch.values.size() != expected)
+        fail("accessor " + std::to_string(sampler.output),
+             std::to_string(ch.values.size() / width) + " output elements for " + std::to_string(ch.times.size()) +
+                 " keys");
+      channels.push_back(std::move(ch));
+    }
+    if (channels.empty()) return;
+
+    std::vector<float> times;
+    for (const Channel& ch : channels) times.insert(times.end(), ch.times.begin(), ch.times.end());
+    std::sort(times.begin(), times.end());
+    times.erase(std::unique(times.begin(), times.end(), [](float a, float b) { return b - a < 1e-6f; }), times.end());
+
+    // An animated node defined by `matrix` (not allowed by glTF, but seen) is decomposed once into TRS.
+    std::vector<Trs> base = default_trs_;
+    for (const Channel& ch : channels)
+      if (uses_matrix_[ch.node]) {
+        const glm::mat4& m = matrix_.at(ch.node);
+        base[ch.node].translation = glm::vec3(m[3]);
+        base[ch.node].scale = glm::vec3(glm::length(glm::vec3(m[0])), glm::length(glm::vec3(m[1])),
+                                        glm::length(glm::vec3(m[2])));
+        base[ch.node].rotation = glm::quat_cast(glm::mat3(glm::vec3(m[0]) / base[ch.node].scale.x,
+                                                          glm::vec3(m[1]) / base[ch.node].scale.y,
+                                                          glm::vec3(m[2]) / base[ch.node].scale.z));
+      }
+    std::vector<char> animated(model_.nodes.size(), 0);
+    for (const Channel& ch : channels) animated[ch.node] = 1;
+
+    const std::size_t nj = skeleton_.joint_count();
+    std::vector<glm::mat4> default_inverse(nj, glm::mat4(1.0f));
+    for (std::size_t j = 0; j < nj; ++j)
+      if (skin_of_joint_[j] >= 0) default_inverse[j] = glm::inverse(default_globals_[skin_joints_[skin_of_joint_[j]]]);
+
+    AnimationClip clip;
+    clip.name = anim.name.empty() ? "animation_0" : anim.name;
+    clip.duration = times.back();
+    clip.loop = true;
+    clip.rotations.resize(nj);
+    for (std::size_t j = 0; j < nj; ++j) clip.rotations[j].joint = static_cast<std::int32_t>(j);
+    clip.translations.resize(1);
+    clip.translations[0].joint = 0;
+    float max_residual = 0.0f;
+    std::vector<glm::mat4> locals(model_.nodes.size()), g(nj);
+    for (float t : times) {
+      std::vector<Trs> trs = base;
+      for (const Channel& ch : channels) {
+        const glm::vec4 v = channel_value(ch, t);
+        if (ch.path == Channel::Translation) trs[ch.node].translation = glm::vec3(v);
+        else if (ch.path == Channel::Scale) trs[ch.node].scale = glm::vec3(v);
+        else trs[ch.node].rotation = glm::normalize(glm::quat(v.w, v.x, v.y, v.z));
+      }
+      for (std::size_t i = 0; i < locals.size(); ++i)
+        locals[i] = uses_matrix_[i] && !animated[i] ? matrix_.at(i) : trs[i].matrix();
+      const std::vector<glm::mat4> global = globals(locals);
+      for (std::size_t j = 0; j < nj; ++j) {
+        g[j] = skin_of_joint_[j] >= 0 ? global[skin_joints_[skin_of_joint_[j]]] * default_inverse[j]
+                                      : glm::mat4(1.0f);
+        const int p = skeleton_.parents[j];
+        const glm::mat4 local = p >= 0 ? glm::inverse(g[p]) * g[j] : g[j];
+        // Rotation part; columns normalised so a near-unit scale does not leak into the quaternion.
+        const glm::mat3 r(glm::normalize(glm::vec3(local[0])), glm::normalize(glm::vec3(local[1])),
+                          glm::normalize(glm::vec3(local[2])));
+        glm::quat q = glm::normalize(glm::quat_cast(r));
+        RotationTrack& track = clip.rotations[j];
+        if (!track.values.empty() && glm::dot(track.values.back(), q) < 0.0f) q = -q;
+        track.times.push_back(t);
+        track.values.push_back(q);
+        const glm::vec3 c = skeleton_.centers[j];
+        if (p < 0) {
+          clip.translations[0].times.push_back(t);
+          clip.translations[0].values.push_back(glm::vec3(g[j] * glm::vec4(c, 1.0f)) - c);
+        } else {
+          // What the H-Anim chain would put at c_j versus where the glTF puts it.
+          const glm::vec3 expected = c - glm::mat3_cast(q) * c;
+          max_residual = std::max(max_residual, glm::length(glm::vec3(local[3]) - expected));
+        }
+      }
+    }
+    body.warnings.push_back(name_ + ": animation '" + clip.name + "' baked at " + std::to_string(times.size()) +
+                            " key times; largest non-root translation residual " + std::to_string(max_residual) +
+                            " m");
+    body.clips.push_back(std::move(clip));
+  }
+
+  std::filesystem::path path_;
+  std::string name_;
+  tinygltf::Model model_;
+  std::vector<int> parent_;
+  std::vector<Trs> default_trs_;
+  std::vector<bool> uses_matrix_;
+  std::unordered_map<std::size_t, glm::mat4> matrix_;
+  std::vector<glm::mat4> default_globals_;
+  std::vector<int> skin_joints_;       // skin joint k -> node
+  std::vector<glm::mat4> ibm_;         // per skin joint
+  std::vector<int> joint_of_skin_;     // skin joint k -> skeleton joint
+  std::vector<int> skin_of_joint_;     // skeleton joint -> skin joint k (-1 for a synthetic root)
+  Skeleton skeleton_;
+};
+
+}  // namespace
+
+ImportedBody load_gltf(const std::filesystem::path& path) { return GltfReader(path).read(); }
+
+}  // namespace strata
