@@ -39,6 +39,7 @@ struct CrowdOptions {
   float camera_yaw = 0.6f;
   float camera_pitch = 0.25f;
   bool follow = false;
+  bool skeleton_overlay = false;
 };
 
 // One line that rewrites itself; only when stderr is a terminal, so logs and CI output stay clean.
@@ -86,6 +87,8 @@ int run_crowd(const CrowdOptions& o) {
   try {
     auto context = create_headless_gl_context();
     SkeletonRenderer renderer(o.width, o.height);
+    const bool bodies = scene.body_level() >= 0;
+    renderer.options().draw_skeleton = !bodies || o.skeleton_overlay;
     Profiler profiler(120, true);
     OrbitCamera camera;
     camera.yaw = o.camera_yaw;
@@ -108,15 +111,24 @@ int run_crowd(const CrowdOptions& o) {
           WalkerLanes lanes = scene.lanes();
           gather_joint_positions(lanes, joints);
           if (f == 0) {
-            // Frame the crowd once from its first pose; a camera that re-fits every frame would pump.
+            // Frame the crowd once from its first pose; a camera that re-fits every frame would pump. Bodies
+            // reach past the joints (the skull above skullbase, the soles below the ankles).
             glm::vec3 lo, hi;
-            if (joint_bounds(joints, lo, hi)) camera.frame_box_tight(lo, hi, aspect);
+            const bool any = bodies ? joint_bounds(scene.skinned().positions, lo, hi) : joint_bounds(joints, lo, hi);
+            if (any) camera.frame_box_tight(lo, hi, aspect);
           } else if (o.follow) {
             glm::vec3 lo, hi;
             if (joint_bounds(joints, lo, hi)) camera.target = 0.5f * (lo + hi);
           }
           SkeletonDrawInput input{&scene.rig().skeleton, joints, scene.walker_count()};
-          renderer.render(input, camera.view(), camera.projection(aspect));
+          const SkinnedCrowd& skinned = scene.skinned();
+          BodyDrawInput body_input;
+          if (bodies) {
+            const Mesh& mesh = scene.rig().body->levels[static_cast<std::size_t>(scene.body_level())].mesh;
+            body_input = {mesh.triangles, skinned.positions, skinned.normals, skinned.vertex_count,
+                          scene.walker_count()};
+          }
+          renderer.render(input, camera.view(), camera.projection(aspect), bodies ? &body_input : nullptr);
           renderer.read_rgba(pixels);
         }
         if (!o.no_png && f % o.png_every == 0) {
@@ -152,6 +164,8 @@ int run_crowd(const CrowdOptions& o) {
                            {"segments", scene.rig().skeleton.segments.size()},
                            {"sites", scene.rig().skeleton.sites.size()}};
     const int clip = scene.clip_of(0);
+    summary["body_level"] = scene.body_level();
+    summary["body_vertices"] = bodies ? scene.skinned().vertex_count : 0;
     summary["clip"] = clip >= 0 ? nlohmann::json(scene.rig().clips[clip].name)
                       : clip == kAllClips ? nlohmann::json("all") : nlohmann::json(nullptr);
     summary["gl_renderer"] = context->renderer();
@@ -198,6 +212,7 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--camera-pitch", o->camera_pitch, "Camera angle above the ground in radians")->capture_default_str();
   cmd->add_flag("--follow", o->follow, "Keep the camera centred on the crowd as it moves");
+  cmd->add_flag("--skeleton-overlay", o->skeleton_overlay, "Draw the skeletons too when bodies are drawn");
   cmd->add_option("--png-every", o->png_every, "Write every K-th frame as PNG")->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
   cmd->add_flag("--no-png", o->no_png, "Render but write no frames");

@@ -9,6 +9,7 @@
 #include "io/bvh.h"
 #include "io/hanim_loader.h"
 #include "motion/retarget.h"
+#include "rig/body_rig.h"
 #include "systems/animation_sample.h"
 
 namespace strata::cli {
@@ -25,6 +26,9 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   cmd.add_option("--seed", o.seed, "Seed for per-walker phase, rate and heading")->capture_default_str();
   cmd.add_option("--spacing", o.spacing, "Metres between walkers on the grid")->capture_default_str();
   cmd.add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+  cmd.add_option("--level", o.level,
+                 "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133), or -1 for skeletons only")
+      ->capture_default_str()->check(CLI::Range(-1, 2));
 }
 
 int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
@@ -49,6 +53,8 @@ int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
 
 std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
   Rig rig = to_rig(o.skeleton.empty() ? load_default_humanoid() : load_humanoid_file(o.skeleton));
+  // The shipped skeleton comes with the shipped body; other skeletons are drawn as skeletons.
+  if (o.skeleton.empty() && o.level >= 0) rig.body = default_bound_body(rig.skeleton);
   CrowdConfig config;
   config.walkers = o.walkers;
   config.seed = o.seed;
@@ -73,6 +79,7 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
     throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");
   }
   scene->spawn_crowd(config);
+  scene->set_body_level(o.level);
   return scene;
 }
 

@@ -1,5 +1,6 @@
 #include "systems/frame_script.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -190,6 +191,19 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
     STRATA_PROFILE_SCOPE(p, "fk");
     fk_system(rig().skeleton, l);
   }
+  const int level = body_level();
+  if (level >= 0) {
+    STRATA_PROFILE_SCOPE(p, "skin");
+    skin_system(rig().body->levels[static_cast<std::size_t>(level)], l, skinned_);
+  } else {
+    skinned_ = SkinnedCrowd{};
+  }
+}
+
+int CrowdScene::body_level() const {
+  const Body* body = rig().body.get();
+  if (!body || body->levels.empty() || body_level_ < 0) return -1;
+  return std::min(body_level_, static_cast<int>(body->levels.size()) - 1);
 }
 
 std::uint64_t CrowdScene::state_hash() const {

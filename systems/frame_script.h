@@ -9,8 +9,9 @@
 //   mocap: 1. mocap_drive retargeted capture -> rotations, root motion, foot-lock goals (systems/mocap_drive.h)
 //          2. ik          goals -> locked feet
 //   then   3. fk          local rotations -> world matrices F(j), skinning F(j)A(j)^-1 (systems/fk.h)
+//          4. skin        rig body level -> deformed world-space vertices, when the rig has a body (systems/skin.h)
 //
-// Later issues insert muscle after FK, then skinning.
+// Later issues insert muscle between FK and skin.
 #include <cstdint>
 #include <vector>
 
@@ -27,6 +28,7 @@
 #include "motion/retarget.h"
 #include "systems/locomotion.h"
 #include "systems/mocap_drive.h"
+#include "systems/skin.h"
 
 namespace strata {
 
@@ -79,6 +81,12 @@ class CrowdScene {
   void set_motion(MotionSource motion) { motion_ = motion; }
   GaitStyle& style() { return style_; }
 
+  // Body level the skin system deforms (clamped to the rig's levels); -1 turns skinning off.
+  void set_body_level(int level) { body_level_ = level; }
+  int body_level() const;
+  // Deformed bodies of the last simulate(), empty when the rig has no body or skinning is off.
+  const SkinnedCrowd& skinned() const { return skinned_; }
+
   // Runs the frame script (see above) for one frame of `dt` seconds.
   void simulate(float dt, Profiler& profiler);
 
@@ -112,6 +120,8 @@ class CrowdScene {
   GaitStyle style_;
   std::unique_ptr<const RetargetResult> mocap_;  // owns the clip and contacts mocap_rig_ points at
   std::unique_ptr<const MocapRig> mocap_rig_;
+  int body_level_ = 0;
+  SkinnedCrowd skinned_;
 };
 
 }  // namespace strata

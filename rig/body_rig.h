@@ -1,0 +1,21 @@
+#pragma once
+// Building a rig's Body: binding every resolution level of a mesh set to the skeleton, once.
+#include <memory>
+#include <span>
+
+#include "components/body.h"
+#include "components/skeleton.h"
+
+namespace strata {
+
+enum class BindingMethod { ThreeStep, Automatic };
+
+// Binds each mesh (finest first) with the paper's three steps and the shipped tables (rig/binding.h), or with
+// the automatic bone-heat weights.
+std::shared_ptr<const Body> bind_body(std::span<const Mesh> levels, const Skeleton& skeleton,
+                                      BindingMethod method = BindingMethod::ThreeStep);
+
+// The shipped default body (rig/body_generator.h) bound to the default skeleton, built once per process.
+std::shared_ptr<const Body> default_bound_body(const Skeleton& skeleton);
+
+}  // namespace strata
