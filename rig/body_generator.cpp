@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -17,6 +18,7 @@
 #include <tbb/parallel_for.h>
 
 #include "io/hanim_loader.h"
+#include "rig/body_cache.h"
 
 namespace strata {
 namespace {
@@ -860,7 +862,21 @@ BodyLevels generate_default_body(const Skeleton& skeleton, const BodyOptions& op
 }
 
 const BodyLevels& default_body() {
-  static const BodyLevels body = generate_default_body(load_default_humanoid().skeleton);
+  static const BodyLevels body = [] {
+    // Bump when the generator's output changes, so stale cache files are ignored.
+    constexpr std::uint32_t kGeneratorVersion = 1;
+    const Skeleton skeleton = load_default_humanoid().skeleton;
+    const BodyOptions options;
+    const auto directory = body_cache_directory();
+    const std::uint64_t key = body_cache_key(skeleton, options, kGeneratorVersion);
+    char name[40];
+    std::snprintf(name, sizeof name, "default_body_%016llx.bin", static_cast<unsigned long long>(key));
+    if (directory)
+      if (std::optional<BodyLevels> cached = load_body_cache(*directory / name, key)) return std::move(*cached);
+    BodyLevels generated = generate_default_body(skeleton, options);
+    if (directory) save_body_cache(*directory / name, key, generated);
+    return generated;
+  }();
   return body;
 }
 

@@ -1,0 +1,151 @@
+#include "rig/body_cache.h"
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <system_error>
+#include <type_traits>
+
+#include <unistd.h>
+
+namespace strata {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'T', 'R', 'B', 'O', 'D', 'Y', '1'};
+constexpr std::uint64_t kMaxElements = 1u << 26;  // refuses absurd counts from a corrupt file before allocating
+
+struct Hasher {
+  std::uint64_t h = 1469598103934665603ull;
+  void bytes(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  }
+  template <class T>
+  void value(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    bytes(&v, sizeof v);
+  }
+};
+
+template <class T>
+void write_vector(std::ofstream& out, const std::vector<T>& v) {
+  const std::uint64_t n = v.size();
+  out.write(reinterpret_cast<const char*>(&n), sizeof n);
+  out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
+}
+
+template <class T>
+bool read_vector(std::ifstream& in, std::vector<T>& v) {
+  std::uint64_t n = 0;
+  if (!in.read(reinterpret_cast<char*>(&n), sizeof n) || n > kMaxElements) return false;
+  v.resize(n);
+  return static_cast<bool>(in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T))));
+}
+
+void write_string(std::ofstream& out, const std::string& s) {
+  write_vector(out, std::vector<char>(s.begin(), s.end()));
+}
+
+bool read_string(std::ifstream& in, std::string& s) {
+  std::vector<char> chars;
+  if (!read_vector(in, chars)) return false;
+  s.assign(chars.begin(), chars.end());
+  return true;
+}
+
+void write_mesh(std::ofstream& out, const Mesh& m) {
+  write_string(out, m.name);
+  write_vector(out, m.positions);
+  write_vector(out, m.normals);
+  write_vector(out, m.uvs);
+  write_vector(out, m.triangles);
+  write_vector(out, m.part);
+  write_vector(out, std::vector<std::uint64_t>{m.part_names.size()});
+  for (const std::string& name : m.part_names) write_string(out, name);
+}
+
+bool read_mesh(std::ifstream& in, Mesh& m) {
+  std::vector<std::uint64_t> parts;
+  if (!read_string(in, m.name) || !read_vector(in, m.positions) || !read_vector(in, m.normals) ||
+      !read_vector(in, m.uvs) || !read_vector(in, m.triangles) || !read_vector(in, m.part) ||
+      !read_vector(in, parts) || parts.size() != 1 || parts[0] > 4096)
+    return false;
+  m.part_names.resize(parts[0]);
+  for (std::string& name : m.part_names)
+    if (!read_string(in, name)) return false;
+  try {
+    validate_mesh(m, "body cache");
+  } catch (const std::exception&) {
+    return false;
+  }
+  return m.normals.size() == m.positions.size();
+}
+
+}  // namespace
+
+std::uint64_t body_cache_key(const Skeleton& skeleton, const BodyOptions& options, std::uint32_t version) {
+  Hasher h;
+  h.value(version);
+  h.value(options.grid_cell);
+  h.value(options.level_vertices);
+  h.value(options.cage_vertices);
+  for (std::size_t j = 0; j < skeleton.joint_count(); ++j) {
+    h.bytes(skeleton.joint_names[j].data(), skeleton.joint_names[j].size());
+    h.value(skeleton.parents[j]);
+    h.value(skeleton.centers[j]);
+  }
+  for (const SkeletonSite& site : skeleton.sites) {
+    h.bytes(site.name.data(), site.name.size());
+    h.value(site.position);
+  }
+  return h.h;
+}
+
+std::optional<std::filesystem::path> body_cache_directory() {
+  const char* off = std::getenv("STRATA_NO_BODY_CACHE");
+  if (off && *off && std::string(off) != "0") return std::nullopt;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::filesystem::path(xdg) / "strata";
+  if (const char* home = std::getenv("HOME"); home && *home)
+    return std::filesystem::path(home) / ".cache" / "strata";
+  return std::nullopt;
+}
+
+std::optional<BodyLevels> load_body_cache(const std::filesystem::path& file, std::uint64_t key) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return std::nullopt;
+  char magic[sizeof kMagic];
+  std::uint64_t stored_key = 0;
+  if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0) return std::nullopt;
+  if (!in.read(reinterpret_cast<char*>(&stored_key), sizeof stored_key) || stored_key != key) return std::nullopt;
+  BodyLevels levels;
+  for (Mesh& m : levels.levels)
+    if (!read_mesh(in, m)) return std::nullopt;
+  if (!read_mesh(in, levels.cage)) return std::nullopt;
+  return levels;
+}
+
+void save_body_cache(const std::filesystem::path& file, std::uint64_t key, const BodyLevels& levels) {
+  std::error_code ec;
+  std::filesystem::create_directories(file.parent_path(), ec);
+  if (ec) return;
+  // Unique temporary name, then rename: concurrent processes (parallel tests) never see half a file.
+  const std::filesystem::path tmp = file.string() + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) return;
+    out.write(kMagic, sizeof kMagic);
+    out.write(reinterpret_cast<const char*>(&key), sizeof key);
+    for (const Mesh& m : levels.levels) write_mesh(out, m);
+    write_mesh(out, levels.cage);
+    if (!out) {
+      out.close();
+      std::filesystem::remove(tmp, ec);
+      return;
+    }
+  }
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) std::filesystem::remove(tmp, ec);
+}
+
+}  // namespace strata

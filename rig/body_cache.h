@@ -1,0 +1,27 @@
+#pragma once
+// A disk cache for generated bodies. Generating the default body takes ~7 s (the L0 simplification dominates),
+// too long for every start of `strata crowd`, so the first run stores the levels and later runs load them in
+// milliseconds. The file lives in $XDG_CACHE_HOME/strata (else ~/.cache/strata), is keyed by a hash of
+// everything the body depends on (generator version, options, skeleton), and is written atomically; a missing,
+// stale, truncated or corrupt file is ignored and regenerated. STRATA_NO_BODY_CACHE=1 turns the cache off.
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+
+#include "components/skeleton.h"
+#include "rig/body_generator.h"
+
+namespace strata {
+
+// Key of a body generated from `skeleton` with `options` by generator `version`.
+std::uint64_t body_cache_key(const Skeleton& skeleton, const BodyOptions& options, std::uint32_t version);
+
+// Directory of the cache, or nullopt when none can be used (disabled, no HOME).
+std::optional<std::filesystem::path> body_cache_directory();
+
+// Loads the levels stored under `key` in `file`; nullopt when absent or unusable for any reason.
+std::optional<BodyLevels> load_body_cache(const std::filesystem::path& file, std::uint64_t key);
+// Stores `levels` under `key`; failures are silent (the cache is an optimisation).
+void save_body_cache(const std::filesystem::path& file, std::uint64_t key, const BodyLevels& levels);
+
+}  // namespace strata
