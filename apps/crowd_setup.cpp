@@ -4,12 +4,16 @@
 #include <tbb/info.h>
 
 #include <charconv>
+#include <filesystem>
 #include <stdexcept>
 
 #include "io/bvh.h"
 #include "io/hanim_loader.h"
 #include "motion/retarget.h"
+#include "io/gltf.h"
+#include "io/makehuman.h"
 #include "rig/body_rig.h"
+#include "rig/skin_from_skeleton.h"
 #include "systems/animation_sample.h"
 
 namespace strata::cli {
@@ -21,6 +25,10 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
                  "What moves the walkers: 'walk' (walk generator along a track; the default), 'clip' (the "
                  "file's own animation) or FILE.bvh (motion capture retargeted onto the skeleton, feet locked by IK)");
   cmd.add_option("--skeleton", o.skeleton, "H-Anim file (X3D or paper XML); default: the shipped 25-joint skeleton");
+  cmd.add_option("--mesh", o.mesh,
+                 "Skinned body to animate instead of the shipped one: a glTF 2.0 file (.glb/.gltf, plays its "
+                 "animation), a MakeHuman hm08 folder (base.obj + default.mhskel + default_weights.mhw; walks), "
+                 "or an X3D H-Anim file with a skin (plays its interpolators)");
   cmd.add_option("--clip", o.clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
   cmd.add_flag("--rest", o.rest, "Hold the rest pose instead of playing a clip");
   cmd.add_option("--seed", o.seed, "Seed for per-walker phase, rate and heading")->capture_default_str();
@@ -51,10 +59,40 @@ int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
                               ", all)");
 }
 
+Rig load_mesh_rig(const std::string& path) {
+  namespace fs = std::filesystem;
+  const std::string ext = fs::path(path).extension().string();
+  Rig rig;
+  if (ext == ".glb" || ext == ".gltf" || fs::is_directory(path)) {
+    ImportedBody imported = ext == ".glb" || ext == ".gltf" ? load_gltf(path) : load_makehuman(path);
+    rig.name = imported.mesh.name.empty() ? fs::path(path).stem().string() : imported.mesh.name;
+    rig.skeleton = std::move(imported.skeleton);
+    rig.clips = std::move(imported.clips);
+    rig.body = std::make_shared<const Body>(Body{{BodyLevel{std::move(imported.mesh), std::move(imported.skin)}}});
+  } else {
+    rig = to_rig(load_humanoid_file(path));
+    std::optional<BodyLevel> skin = skin_from_skeleton(rig.skeleton);
+    if (!skin) throw std::invalid_argument(path + ": the file has no skin with weights (use --skeleton for bones)");
+    rig.body = std::make_shared<const Body>(Body{{std::move(*skin)}});
+  }
+  return rig;
+}
+
 std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
-  Rig rig = to_rig(o.skeleton.empty() ? load_default_humanoid() : load_humanoid_file(o.skeleton));
-  // The shipped skeleton comes with the shipped body; other skeletons are drawn as skeletons.
-  if (o.skeleton.empty() && o.level >= 0) rig.body = default_bound_body(rig.skeleton);
+  Rig rig;
+  if (!o.mesh.empty()) {
+    rig = load_mesh_rig(o.mesh);
+  } else {
+    rig = to_rig(o.skeleton.empty() ? load_default_humanoid() : load_humanoid_file(o.skeleton));
+    // The shipped skeleton comes with the shipped body; an X3D skeleton with a skin brings its own.
+    if (o.level >= 0) {
+      if (o.skeleton.empty()) {
+        rig.body = default_bound_body(rig.skeleton);
+      } else if (std::optional<BodyLevel> skin = skin_from_skeleton(rig.skeleton)) {
+        rig.body = std::make_shared<const Body>(Body{{std::move(*skin)}});
+      }
+    }
+  }
   CrowdConfig config;
   config.walkers = o.walkers;
   config.seed = o.seed;

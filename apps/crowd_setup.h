@@ -16,6 +16,7 @@ struct SceneOptions {
                          // when the skeleton has legs and arms to walk with, else clip; --clip implies clip
   std::size_t walkers = 25;
   std::string skeleton;  // empty = the embedded default skeleton
+  std::string mesh;      // a skinned body to use instead: .glb/.gltf, a MakeHuman folder, or an X3D with a skin
   std::string clip;      // name, index or "all"; empty = all clips
   bool rest = false;
   std::uint64_t seed = 1;
@@ -31,6 +32,9 @@ void add_scene_options(CLI::App& cmd, SceneOptions& options);
 // plays a scene's TimeSensors together; the default when the rig has clips), or kRestPose when `rest` is set
 // or the rig has no clips. Throws std::invalid_argument naming the clip and listing the available ones.
 int resolve_clip(const Rig& rig, const std::string& clip, bool rest);
+
+// A rig from a skinned body file (see SceneOptions::mesh). Throws LoadError / std::invalid_argument.
+Rig load_mesh_rig(const std::string& path);
 
 // Loads the rig (LoadError on bad input), resolves the clip and spawns the grid.
 std::unique_ptr<CrowdScene> build_scene(const SceneOptions& options);

@@ -143,6 +143,57 @@ TEST(StrataCrowd, DrivesWalkersFromMotionCapture) {
   EXPECT_NE(bad.out.find("nope.bvh"), std::string::npos) << bad.out;
 }
 
+TEST(StrataCrowd, DrawsSkinnedBodiesAndImportedMeshes) {
+  fs::path out = scratch("body");
+  Result r = run("crowd --walkers 2 --frames 2 --width 96 --height 64 --level 2 --no-progress --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary.at("body_level"), 2);
+  EXPECT_EQ(summary.at("body_vertices"), 5133);
+  std::set<std::string> systems;
+  for (const auto& s : summary.at("systems")) systems.insert(s.at("name").get<std::string>());
+  EXPECT_TRUE(systems.count("skin"));
+
+  fs::path gltf = fs::path(STRATA_SHARED_DATA) / "gltf_khronos_samples" / "CesiumMan.glb";
+  if (!fs::exists(gltf)) GTEST_SKIP() << "no " << gltf;
+  fs::path mesh_out = scratch("cesium");
+  Result m = run("crowd --mesh " + gltf.string() + " --walkers 2 --frames 3 --width 96 --height 64 --no-progress --out " +
+                 mesh_out.string());
+  ASSERT_EQ(m.status, 0) << m.out;
+  nlohmann::json ms = nlohmann::json::parse(std::ifstream(mesh_out / "summary.json"));
+  EXPECT_EQ(ms.at("body_vertices"), 3273);
+  EXPECT_EQ(ms.at("skeleton").at("joints"), 19);
+  EXPECT_EQ(ms.at("clip"), "all") << "a glTF without H-Anim limbs plays its own animation";
+
+  Result bad = run("crowd --mesh " + scratch("missing.glb").string() + " --frames 1 --no-progress --out " +
+                   scratch("cesium_bad").string());
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.out.find("missing.glb"), std::string::npos) << bad.out;
+}
+
+TEST(StrataReport, SkinWritesLevelsBindingAndQuality) {
+  fs::path json = scratch("skin.json");
+  Result r = run("report skin --no-automatic --seconds 0.3 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  ASSERT_EQ(j.at("levels").size(), 3u);
+  const int paper[3] = {17953, 8923, 5133};
+  for (int l = 0; l < 3; ++l) {
+    const auto& level = j.at("levels")[l];
+    for (const char* key : {"vertices", "triangles", "parts", "bound_one_joint", "bound_two_joints", "seam_gap_max_m",
+                            "inverted_triangles", "elbow_volume_change_pct", "knee_volume_change_pct", "nan_count"})
+      EXPECT_TRUE(level.contains(key)) << key;
+    EXPECT_NEAR(level.at("vertices").get<double>(), paper[l], 0.02 * paper[l]);
+    EXPECT_EQ(level.at("parts"), 53);
+    EXPECT_EQ(level.at("nan_count"), 0);
+    EXPECT_EQ(level.at("seam_gap_max_m"), 0.0);
+    EXPECT_EQ(level.at("bound_one_joint").get<int>() + level.at("bound_two_joints").get<int>() +
+                  level.at("bound_more_joints").get<int>(),
+              level.at("vertices").get<int>());
+    EXPECT_LT(level.at("elbow_volume_change_pct").get<double>(), 0.0) << "linear blend skinning loses volume";
+  }
+}
+
 TEST(StrataReport, GaitWritesTheMeasuredTargets) {
   fs::path json = scratch("gait.json");
   Result r = run("report gait --walkers 4 --seconds 6 --json " + json.string());

@@ -1,0 +1,181 @@
+// strata report skin: the default body's levels, their binding (the paper's Table 1 columns) and how well linear
+// blend skinning holds up over a walk cycle and at 120 deg elbow/knee flexion, for the three-step binding and
+// for the automatic bone-heat weights side by side.
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <set>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "apps/commands.h"
+#include "io/hanim_loader.h"
+#include "rig/binding.h"
+#include "rig/body_generator.h"
+#include "rig/skin_metrics.h"
+#include "systems/fk_reference.h"
+#include "systems/frame_script.h"
+#include "systems/skin_reference.h"
+
+namespace strata::cli {
+namespace {
+
+struct SkinReportOptions {
+  std::string json;
+  float seconds = 2.5f;  // of walking: two gait cycles at the default cadence
+  float fps = 60.0f;
+  bool automatic = true;
+};
+
+struct Quality {
+  std::size_t inverted_triangles = 0;          // worst frame of the walk
+  std::size_t flexion_inverted_triangles = 0;  // worst of the two 120 deg flexions
+  double seam_gap_max_m = 0.0;
+  std::size_t nan_count = 0;
+  double elbow_volume_change_pct = 0.0, knee_volume_change_pct = 0.0;
+};
+
+void accumulate(Quality& q, const SkinMetrics& m) {
+  q.inverted_triangles = std::max(q.inverted_triangles, m.inverted_triangles);
+  q.seam_gap_max_m = std::max(q.seam_gap_max_m, m.seam_gap_max_m);
+  q.nan_count += m.nan_count;
+}
+
+// Walks one walker through `seconds` and a 120 deg flexion of the left elbow and knee; measures every frame.
+Quality measure(const Rig& rig_template, const BodyLevel& level, const SkinReportOptions& o) {
+  Quality q;
+  Rig rig = rig_template;
+  auto body = std::make_shared<Body>();
+  body->levels.push_back(level);
+  rig.body = body;
+  CrowdScene scene(rig);
+  CrowdConfig config;
+  config.walkers = 1;
+  config.motion = MotionSource::Walk;
+  scene.spawn_crowd(config);
+  scene.set_body_level(-1);  // this report skins in humanoid space itself
+  Profiler profiler(8, false);
+  const auto frames = static_cast<int>(o.seconds * o.fps);
+  for (int f = 0; f < frames; ++f) {
+    scene.simulate(1.0f / o.fps, profiler);
+    const WalkerLanes lanes = scene.lanes();
+    const std::vector<glm::mat4> skinning = walker_skinning_matrices(lanes, 0);
+    const SkinnedVertices posed = skin_reference(level.mesh, level.binding, skinning);
+    accumulate(q, measure_skin(level.mesh, level.binding, skinning, posed.positions));
+  }
+  const Skeleton& s = rig.skeleton;
+  for (const char* name : {"l_elbow", "l_knee"}) {
+    const int joint = s.find_joint(name);
+    if (joint < 0) continue;
+    // Flexion the way the joint's limits allow more of it (elbows -x, knees +x in H-Anim).
+    const JointLimits& lim = s.limits[joint];
+    const float angle = lim.present && -lim.lower.x > lim.upper.x ? -2.0944f : 2.0944f;
+    std::vector<glm::quat> rotations(s.joint_count(), glm::quat(1, 0, 0, 0));
+    rotations[joint] = glm::angleAxis(angle, glm::vec3(1, 0, 0));
+    const ReferencePose pose = fk_reference(s, rotations, glm::vec3(0.0f));
+    const SkinnedVertices posed = skin_reference(level.mesh, level.binding, pose.skinning);
+    const SkinMetrics m = measure_skin(level.mesh, level.binding, pose.skinning, posed.positions);
+    q.flexion_inverted_triangles = std::max(q.flexion_inverted_triangles, m.inverted_triangles);
+    q.seam_gap_max_m = std::max(q.seam_gap_max_m, m.seam_gap_max_m);
+    q.nan_count += m.nan_count;
+    const double change = flexion_volume_change_pct(level.mesh, level.binding, s, joint, std::abs(angle),
+                                                    std::string(name) == "l_elbow" ? 0.08f : 0.11f);
+    (std::string(name) == "l_elbow" ? q.elbow_volume_change_pct : q.knee_volume_change_pct) = change;
+  }
+  return q;
+}
+
+nlohmann::json quality_json(const Quality& q) {
+  return {{"inverted_triangles", q.inverted_triangles},
+          {"flexion_inverted_triangles", q.flexion_inverted_triangles},
+          {"seam_gap_max_m", q.seam_gap_max_m},
+          {"elbow_volume_change_pct", q.elbow_volume_change_pct},
+          {"knee_volume_change_pct", q.knee_volume_change_pct},
+          {"nan_count", q.nan_count}};
+}
+
+int run_skin_report(const SkinReportOptions& o) {
+  try {
+    const Rig rig = to_rig(load_default_humanoid());
+    const BodyLevels& levels = default_body();
+    const int paper_vertices[3] = {17953, 8923, 5133};
+    nlohmann::json out;
+    nlohmann::json level_reports = nlohmann::json::array();
+    bool targets = true;
+    std::printf("%-5s %8s %9s %5s %9s %9s %9s %9s %11s %9s %9s\n", "level", "vertices", "triangles", "parts",
+                "bound 1", "bound 2", "inverted", "seam gap", "elbow vol%", "knee vol%", "NaN");
+    for (int l = 0; l < 3; ++l) {
+      const Mesh& mesh = levels.levels[static_cast<std::size_t>(l)];
+      BodyLevel level{mesh, bind_three_step(mesh, rig.skeleton, default_binding_tables())};
+      const BindingStats stats = binding_stats(level.binding);
+      std::set<std::uint16_t> parts(mesh.part.begin(), mesh.part.end());
+      const Quality q = measure(rig, level, o);
+      const double count_error = 100.0 * std::abs(double(mesh.vertex_count()) - paper_vertices[l]) / paper_vertices[l];
+      const bool ok = parts.size() == 53 && count_error < 2.0 && q.seam_gap_max_m == 0.0 &&
+                      q.inverted_triangles == 0 && q.nan_count == 0;
+      targets = targets && ok;
+      nlohmann::json j = {{"level", l},
+                          {"vertices", mesh.vertex_count()},
+                          {"triangles", mesh.triangle_count()},
+                          {"parts", parts.size()},
+                          {"vertex_count_error_pct", count_error},
+                          {"bound_one_joint", stats.one_joint},
+                          {"bound_two_joints", stats.two_joints},
+                          {"bound_more_joints", stats.more_joints},
+                          {"paper_vertices", paper_vertices[l]},
+                          {"targets_met", ok}};
+      j.update(quality_json(q));
+      std::printf("%-5d %8zu %9zu %5zu %9zu %9zu %9zu %9.2g %11.1f %9.1f %9zu  three-step%s\n", l, mesh.vertex_count(),
+                  mesh.triangle_count(), parts.size(), stats.one_joint, stats.two_joints, q.inverted_triangles,
+                  q.seam_gap_max_m, q.elbow_volume_change_pct, q.knee_volume_change_pct, q.nan_count,
+                  ok ? "" : "  MISSED");
+      if (o.automatic) {
+        BodyLevel automatic{mesh, bind_automatic(mesh, rig.skeleton)};
+        const BindingStats a_stats = binding_stats(automatic.binding);
+        const Quality a = measure(rig, automatic, o);
+        nlohmann::json aj = {{"bound_one_joint", a_stats.one_joint},
+                             {"bound_two_joints", a_stats.two_joints},
+                             {"bound_more_joints", a_stats.more_joints}};
+        aj.update(quality_json(a));
+        j["automatic"] = aj;
+        std::printf("%-5s %8s %9s %5s %9zu %9zu %9zu %9.2g %11.1f %9.1f %9zu  automatic (bone heat)\n", "", "", "",
+                    "", a_stats.one_joint, a_stats.two_joints, a.inverted_triangles, a.seam_gap_max_m,
+                    a.elbow_volume_change_pct, a.knee_volume_change_pct, a.nan_count);
+      }
+      level_reports.push_back(j);
+    }
+    out["levels"] = level_reports;
+    out["cage"] = {{"vertices", levels.cage.vertex_count()}, {"triangles", levels.cage.triangle_count()}};
+    out["walk_seconds"] = o.seconds;
+    out["flexion_deg"] = 120;
+    out["targets_met"] = targets;
+    if (!o.json.empty()) {
+      std::ofstream f(o.json);
+      f << out.dump(2) << "\n";
+      if (!f) throw std::runtime_error("cannot write " + o.json);
+    }
+    std::printf("cage: %zu vertices, %zu triangles; targets %s\n", levels.cage.vertex_count(),
+                levels.cage.triangle_count(), targets ? "met" : "MISSED");
+  } catch (const std::exception& e) {
+    std::cerr << "strata report skin: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_skin_report(CLI::App& report, int& exit_code) {
+  auto o = std::make_shared<SkinReportOptions>();
+  auto* skin = report.add_subcommand("skin", "Measure the default body's levels, binding and skinning quality");
+  skin->add_option("--json", o->json, "Write the report here");
+  skin->add_option("--seconds", o->seconds, "Seconds of walking measured")->capture_default_str();
+  skin->add_flag("!--no-automatic", o->automatic, "Skip the automatic (bone heat) binding comparison");
+  skin->callback([o, &exit_code] { exit_code = run_skin_report(*o); });
+}
+
+}  // namespace strata::cli
