@@ -121,13 +121,7 @@ int run_crowd(const CrowdOptions& o) {
             if (joint_bounds(joints, lo, hi)) camera.target = 0.5f * (lo + hi);
           }
           SkeletonDrawInput input{&scene.rig().skeleton, joints, scene.walker_count()};
-          const SkinnedCrowd& skinned = scene.skinned();
-          BodyDrawInput body_input;
-          if (bodies) {
-            const Mesh& mesh = scene.rig().body->levels[static_cast<std::size_t>(scene.body_level())].mesh;
-            body_input = {mesh.triangles, skinned.positions, skinned.normals, skinned.vertex_count,
-                          scene.walker_count()};
-          }
+          const BodyDrawInput body_input = body_draw_input(scene);
           renderer.render(input, camera.view(), camera.projection(aspect), bodies ? &body_input : nullptr);
           renderer.read_rgba(pixels);
         }

@@ -30,6 +30,7 @@ struct ViewOptions {
   std::size_t frames = 0;  // 0 = until the window closes
   bool hidden = false;
   std::string screenshot_dir = "out/view";
+  bool skeleton_overlay = false;
 };
 
 std::string timing_title(const Profiler& profiler, double fps) {
@@ -62,6 +63,7 @@ int run_view(const ViewOptions& o) {
     std::vector<glm::vec3> joints;
     std::vector<std::uint8_t> pixels;
     bool paused = false;
+    bool show_skeleton = o.skeleton_overlay;
     bool framed = false;
     std::size_t frame = 0, screenshots = 0;
     auto last = std::chrono::steady_clock::now();
@@ -97,7 +99,9 @@ int run_view(const ViewOptions& o) {
           framed = true;
         }
         SkeletonDrawInput draw{&scene.rig().skeleton, joints, scene.walker_count()};
-        renderer.render(draw, camera.view(), camera.projection(aspect));
+        const BodyDrawInput bodies = body_draw_input(scene);
+        renderer.options().draw_skeleton = bodies.walker_count == 0 || show_skeleton;
+        renderer.render(draw, camera.view(), camera.projection(aspect), bodies.walker_count ? &bodies : nullptr);
         if (input.screenshot) {
           renderer.read_rgba(pixels);
           std::filesystem::create_directories(o.screenshot_dir);
@@ -141,6 +145,7 @@ void add_view_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--height", o->height, "Window height")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Quit after F frames (0 = run until closed)")->capture_default_str();
   cmd->add_flag("--hidden", o->hidden, "Create the window hidden (smoke tests under Xvfb)");
+  cmd->add_flag("--skeleton-overlay", o->skeleton_overlay, "Draw the skeletons too when bodies are drawn");
   cmd->add_option("--screenshot-dir", o->screenshot_dir, "Where S saves PNG screenshots")->capture_default_str();
   cmd->callback([o, &exit_code] { exit_code = run_view(*o); });
 }

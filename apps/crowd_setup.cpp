@@ -121,6 +121,19 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
   return scene;
 }
 
+BodyDrawInput body_draw_input(const CrowdScene& scene) {
+  BodyDrawInput input;
+  const int level = scene.body_level();
+  if (level < 0) return input;
+  const SkinnedCrowd& skinned = scene.skinned();
+  input.triangles = scene.rig().body->levels[static_cast<std::size_t>(level)].mesh.triangles;
+  input.positions = skinned.positions;
+  input.normals = skinned.normals;
+  input.vertex_count = skinned.vertex_count;
+  input.walker_count = skinned.vertex_count ? scene.walker_count() : 0;
+  return input;
+}
+
 int thread_count(const SceneOptions& o) { return o.threads > 0 ? o.threads : tbb::info::default_concurrency(); }
 
 }  // namespace strata::cli

@@ -3,6 +3,7 @@
 #include <memory>
 #include <string>
 
+#include "render/skeleton_renderer.h"
 #include "systems/frame_script.h"
 
 namespace CLI {
@@ -38,6 +39,10 @@ Rig load_mesh_rig(const std::string& path);
 
 // Loads the rig (LoadError on bad input), resolves the clip and spawns the grid.
 std::unique_ptr<CrowdScene> build_scene(const SceneOptions& options);
+
+// What the renderer needs to draw the scene's skinned bodies from the last simulate(); walker_count is 0 when
+// the scene has no body to draw.
+BodyDrawInput body_draw_input(const CrowdScene& scene);
 
 // Worker threads the options ask for, resolved against the machine.
 int thread_count(const SceneOptions& options);
