@@ -5,9 +5,12 @@
 //
 // Matrices are 3x4 affine, column-major: components [m00 m10 m20 | m01 m11 m21 | m02 m12 m22 | tx ty tz].
 // The fourth row (0 0 0 1) is implicit; storing it would add a third more bandwidth for constants.
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
+
+#include <glm/vec3.hpp>
 
 #include "ecs/soa_table.h"
 
@@ -98,5 +101,24 @@ struct WalkerLanes {
 };
 
 WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count);
+
+// A walker's placement as a transform from its humanoid space to the world: T(position) Ry(heading) S(scale).
+// Heading h turns +Z (the humanoid's forward) to (sin h, 0, cos h).
+struct Placement {
+  glm::vec3 position{0.0f};
+  float cos_heading = 1.0f, sin_heading = 0.0f, scale = 1.0f;
+
+  glm::vec3 direction(const glm::vec3& d) const {
+    return {cos_heading * d.x + sin_heading * d.z, d.y, -sin_heading * d.x + cos_heading * d.z};
+  }
+  glm::vec3 point(const glm::vec3& p) const { return position + direction(scale * p); }
+};
+
+inline Placement placement_of(const WalkerLanes& lanes, std::size_t walker) {
+  const std::size_t s = lanes.stride;
+  const float heading = lanes.placement[3 * s + walker];
+  return {{lanes.placement[0 * s + walker], lanes.placement[1 * s + walker], lanes.placement[2 * s + walker]},
+          std::cos(heading), std::sin(heading), lanes.placement[4 * s + walker]};
+}
 
 }  // namespace strata

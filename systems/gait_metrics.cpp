@@ -14,14 +14,8 @@ namespace {
 
 glm::vec3 world_joint(const WalkerLanes& l, std::size_t w, std::int32_t joint) {
   const std::size_t s = l.stride;
-  const float scale = l.placement[4 * s + w];
-  const float h = l.placement[3 * s + w];
-  const glm::vec3 local{l.world[(joint * kAffineFloats + 9) * s + w], l.world[(joint * kAffineFloats + 10) * s + w],
-                        l.world[(joint * kAffineFloats + 11) * s + w]};
-  const glm::vec3 p = scale * local;
-  const float c = std::cos(h), sn = std::sin(h);
-  return {l.placement[0 * s + w] + c * p.x + sn * p.z, l.placement[1 * s + w] + p.y,
-          l.placement[2 * s + w] - sn * p.x + c * p.z};
+  return placement_of(l, w).point({l.world[(joint * kAffineFloats + 9) * s + w], l.world[(joint * kAffineFloats + 10) * s + w],
+                                   l.world[(joint * kAffineFloats + 11) * s + w]});
 }
 
 double distance_mm(const glm::vec3& a, const float ref[3]) {
