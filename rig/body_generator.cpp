@@ -77,13 +77,15 @@ float sd_box(const Prim& s, const glm::vec3& p) {
 struct Slice {
   float y, width, back, front;
 };
-// Widths are capped at 0.36 below the waist (ANSUR hip breadth 0.346 rather than MH's 0.39 with the thigh roots):
-// the H-Anim hands hang at x = +-0.198 and must not touch the hips. Above the axilla the MH rows include the
+// Widths are capped at 0.32 from the crotch up to the waist, narrower than ANSUR's 0.346 hip breadth: the H-Anim
+// wrists and forearms hang at x = +-0.2 with their inner skin at x ~ +-0.17, and a hip that touches them fuses arm
+// and trunk into one surface (measured: with 0.356 the level meshes had genus 4 and the fused patches stretched
+// 28x and flipped in the walk, 164 inverted triangles at level 2). 0.32 keeps a gap of over 1 cm. Above the axilla the MH rows include the
 // A-posed deltoids; those rows are replaced by a narrowing shoulder girdle, the deltoids being arm primitives.
 constexpr Slice kSlices[] = {
-    {0.790f, 0.330f, -0.080f, 0.090f}, {0.830f, 0.350f, -0.096f, 0.107f}, {0.860f, 0.356f, -0.109f, 0.112f},
-    {0.890f, 0.356f, -0.117f, 0.123f}, {0.920f, 0.356f, -0.120f, 0.131f}, {0.950f, 0.352f, -0.111f, 0.136f},
-    {0.980f, 0.348f, -0.098f, 0.139f}, {1.010f, 0.341f, -0.079f, 0.140f}, {1.040f, 0.320f, -0.060f, 0.138f},
+    {0.790f, 0.310f, -0.080f, 0.090f}, {0.830f, 0.318f, -0.096f, 0.107f}, {0.860f, 0.320f, -0.109f, 0.112f},
+    {0.890f, 0.320f, -0.117f, 0.123f}, {0.920f, 0.320f, -0.120f, 0.131f}, {0.950f, 0.320f, -0.111f, 0.136f},
+    {0.980f, 0.320f, -0.098f, 0.139f}, {1.010f, 0.318f, -0.079f, 0.140f}, {1.040f, 0.310f, -0.060f, 0.138f},
     {1.070f, 0.293f, -0.049f, 0.137f}, {1.100f, 0.268f, -0.041f, 0.142f}, {1.138f, 0.254f, -0.033f, 0.148f},
     {1.160f, 0.253f, -0.033f, 0.153f}, {1.190f, 0.259f, -0.037f, 0.157f}, {1.220f, 0.266f, -0.043f, 0.155f},
     {1.252f, 0.280f, -0.051f, 0.155f}, {1.280f, 0.295f, -0.057f, 0.147f}, {1.310f, 0.312f, -0.061f, 0.133f},
@@ -427,12 +429,19 @@ float evaluate(const BodyModel& m, const glm::vec3& q, const std::vector<std::ui
     hand = std::min(hand, smin(palm, d, f == Thumb ? 0.016f : 0.008f));
   }
   const float arm = smin(smin(upper, fore, 0.025f), hand, 0.02f);
-  body = smin(body, arm, 0.03f * smoothstep(1.22f, 1.34f, q.y));
 
   const float leg_upper = smin(blend(m.thigh, 0.04f), blend(m.shin, 0.03f), 0.03f);
   // The sole is cut flat by a smooth max: a sharp sole edge makes meshoptimizer fold triangles over it.
   const float leg = smax(smin(leg_upper, blend(m.foot, 0.025f), 0.03f), -q.y, 0.012f);
-  return smin(body, leg, 0.035f * smoothstep(0.70f, 0.86f, q.y));
+  body = smin(body, leg, 0.035f * smoothstep(0.70f, 0.86f, q.y));
+  // Below the armpit the trunk and legs are carved back to kArmClearance from the arm, so a hanging hand or wrist
+  // never touches a hip or thigh. Touching (as real hands do) fused arm and body into one surface: the levels had
+  // genus 4, and the fused patches stretched up to 28x and flipped as the arm swung. The carve fades out towards
+  // the shoulder, where the arm does join the trunk.
+  constexpr float kArmClearance = 0.012f;
+  const float carve = kArmClearance * (1.0f - smoothstep(1.16f, 1.26f, q.y));
+  body = std::max(body, carve - arm);
+  return smin(body, arm, 0.03f * smoothstep(1.22f, 1.34f, q.y));
 }
 
 // Part of the primitive nearest to q (smallest own distance); the loft splits by height.
@@ -864,7 +873,7 @@ BodyLevels generate_default_body(const Skeleton& skeleton, const BodyOptions& op
 const BodyLevels& default_body() {
   static const BodyLevels body = [] {
     // Bump when the generator's output changes, so stale cache files are ignored.
-    constexpr std::uint32_t kGeneratorVersion = 1;
+    constexpr std::uint32_t kGeneratorVersion = 3;
     const Skeleton skeleton = load_default_humanoid().skeleton;
     const BodyOptions options;
     const auto directory = body_cache_directory();
