@@ -5,13 +5,52 @@
 #include <iostream>
 #include <set>
 
+#include <filesystem>
+
 #include "apps/commands.h"
+#include "apps/crowd_setup.h"
+#include "io/bvh.h"
 #include "io/hanim_loader.h"
+#include "io/obj.h"
 
 namespace strata::cli {
 namespace {
 
+// Meshes, skinned bodies and motion capture: the formats other than humanoid XML.
+int run_other_info(const std::string& path, const std::string& ext) {
+  try {
+    if (ext == ".bvh") {
+      const BvhMotion m = load_bvh_file(path);
+      std::cout << "file:       " << path << "\nformat:     BVH motion capture\njoints:     " << m.joint_count()
+                << " (+" << m.end_site_count() << " end sites), " << m.channel_count << " channels\nframes:     "
+                << m.frame_count << " at " << m.frame_time << " s (" << m.duration() << " s)\n";
+    } else if (ext == ".obj") {
+      const Mesh m = load_obj_file(path);
+      std::cout << "file:       " << path << "\nformat:     Wavefront OBJ\nvertices:   " << m.vertex_count()
+                << "\ntriangles:  " << m.triangle_count() << "\nparts:      " << m.part_names.size() << "\n";
+    } else {
+      const Rig rig = load_mesh_rig(path);
+      const Mesh& m = rig.body->levels.front().mesh;
+      std::cout << "file:       " << path << "\nformat:     "
+                << (ext == ".glb" || ext == ".gltf" ? "glTF 2.0 skinned mesh" : "MakeHuman hm08 body")
+                << "\njoints:     " << rig.skeleton.joint_count() << "\nvertices:   " << m.vertex_count()
+                << "\ntriangles:  " << m.triangle_count() << "\nparts:      " << m.part_names.size()
+                << "\nclips:      " << rig.clips.size() << "\n";
+      for (const AnimationClip& c : rig.clips)
+        std::cout << "  " << c.name << ": " << c.duration << " s, " << c.rotations.size() << " rotation + "
+                  << c.translations.size() << " translation channels\n";
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "strata info: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
 int run_info(const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext == ".bvh" || ext == ".obj" || ext == ".glb" || ext == ".gltf" || std::filesystem::is_directory(path))
+    return run_other_info(path, ext);
   HumanoidAsset asset;
   try {
     asset = load_humanoid_file(path);
@@ -50,7 +89,8 @@ int run_info(const std::string& path) {
 }  // namespace
 
 void add_info_command(CLI::App& app, int& exit_code) {
-  auto* cmd = app.add_subcommand("info", "Load a humanoid file (X3D H-Anim or paper-era XML) and print a summary");
+  auto* cmd = app.add_subcommand("info", "Load any supported input (X3D H-Anim, paper-era XML, BVH, OBJ, glTF, a "
+                                         "MakeHuman folder) and print a summary");
   auto path = std::make_shared<std::string>();
   cmd->add_option("FILE", *path, "Input file")->required();
   cmd->callback([path, &exit_code] { exit_code = run_info(*path); });

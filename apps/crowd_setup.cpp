@@ -87,7 +87,7 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
     // The shipped skeleton comes with the shipped body; an X3D skeleton with a skin brings its own.
     if (o.level >= 0) {
       if (o.skeleton.empty()) {
-        rig.body = default_bound_body(rig.skeleton);
+        rig.body = default_bound_body();
       } else if (std::optional<BodyLevel> skin = skin_from_skeleton(rig.skeleton)) {
         rig.body = std::make_shared<const Body>(Body{{std::move(*skin)}});
       }

@@ -1,7 +1,6 @@
 #include "rig/body_rig.h"
 
-#include <mutex>
-
+#include "io/hanim_loader.h"
 #include "rig/binding.h"
 #include "rig/body_generator.h"
 
@@ -21,15 +20,9 @@ std::shared_ptr<const Body> bind_body(std::span<const Mesh> levels, const Skelet
   return body;
 }
 
-std::shared_ptr<const Body> default_bound_body(const Skeleton& skeleton) {
-  // The default body is generated from the default skeleton; binding it is deterministic, so one copy serves
-  // every scene of the process.
-  static std::once_flag once;
-  static std::shared_ptr<const Body> body;
-  std::call_once(once, [&] {
-    const BodyLevels& levels = default_body();
-    body = bind_body(levels.levels, skeleton);
-  });
+std::shared_ptr<const Body> default_bound_body() {
+  // Binding is deterministic, so one copy serves every scene of the process.
+  static const std::shared_ptr<const Body> body = bind_body(default_body().levels, load_default_humanoid().skeleton);
   return body;
 }
 

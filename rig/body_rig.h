@@ -15,7 +15,8 @@ enum class BindingMethod { ThreeStep, Automatic };
 std::shared_ptr<const Body> bind_body(std::span<const Mesh> levels, const Skeleton& skeleton,
                                       BindingMethod method = BindingMethod::ThreeStep);
 
-// The shipped default body (rig/body_generator.h) bound to the default skeleton, built once per process.
-std::shared_ptr<const Body> default_bound_body(const Skeleton& skeleton);
+// The shipped default body (rig/body_generator.h) bound to the shipped default skeleton, built once per process.
+// It fits that skeleton only, so the function takes none: a caller cannot pair it with another by mistake.
+std::shared_ptr<const Body> default_bound_body();
 
 }  // namespace strata

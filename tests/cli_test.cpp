@@ -61,6 +61,24 @@ TEST(StrataInfo, LoadsEveryRealHAnimFile) {
   }
 }
 
+TEST(StrataInfo, SummarisesMeshesBodiesAndMotionCapture) {
+  const fs::path data(STRATA_SHARED_DATA);
+  if (!fs::exists(data / "cmu_mocap_bvh")) GTEST_SKIP() << "no shared data";
+  const std::pair<fs::path, const char*> cases[] = {
+      {data / "cmu_mocap_bvh" / "02_02_daz.bvh", "frames:     299"},
+      {data / "gltf_khronos_samples" / "CesiumMan.glb", "vertices:   3273"},
+      {data / "makehuman_hm08", "joints:     25"},
+      {data / "makehuman_hm08" / "base.obj", "vertices:   19158"}};
+  for (const auto& [file, expected] : cases) {
+    Result r = run("info " + file.string());
+    EXPECT_EQ(r.status, 0) << file << ": " << r.out;
+    EXPECT_NE(r.out.find(expected), std::string::npos) << file << ": " << r.out;
+  }
+  Result bad = run("info " + scratch("broken.obj").string());
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.out.find("broken.obj"), std::string::npos) << bad.out;
+}
+
 TEST(StrataInfo, BadInputFailsWithOneLineNamingTheFile) {
   fs::path bad = scratch("broken.x3d");
   std::ofstream(bad) << "<X3D><Scene><HAnimHumanoid name='h'>\n<HAnimJoint name='HumanoidRoot' center='0 1'/>\n"
