@@ -126,7 +126,7 @@ BodyDrawInput body_draw_input(const CrowdScene& scene) {
   const int level = scene.body_level();
   if (level < 0) return input;
   const SkinnedCrowd& skinned = scene.skinned();
-  input.triangles = scene.rig().body->levels[static_cast<std::size_t>(level)].mesh.triangles;
+  input.triangles = scene.skin_layout().triangles;
   input.positions = skinned.positions;
   input.normals = skinned.normals;
   input.vertex_count = skinned.vertex_count;

@@ -29,6 +29,7 @@ CrowdScene::CrowdScene(Rig rig) {
   } catch (const std::exception& e) {
     walk_error_ = e.what();
   }
+  set_body_level(body_level_);
 }
 
 const std::vector<LimbChain>& CrowdScene::limbs() const {
@@ -194,10 +195,16 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
   const int level = body_level();
   if (level >= 0) {
     STRATA_PROFILE_SCOPE(p, "skin");
-    skin_system(rig().body->levels[static_cast<std::size_t>(level)], l, skinned_);
+    skin_system(layout_, l, skinned_);
   } else {
     skinned_ = SkinnedCrowd{};
   }
+}
+
+void CrowdScene::set_body_level(int level) {
+  body_level_ = level;
+  const int used = body_level();
+  layout_ = used >= 0 ? make_skin_layout(rig().body->levels[static_cast<std::size_t>(used)]) : SkinLayout{};
 }
 
 int CrowdScene::body_level() const {

@@ -82,8 +82,10 @@ class CrowdScene {
   GaitStyle& style() { return style_; }
 
   // Body level the skin system deforms (clamped to the rig's levels); -1 turns skinning off.
-  void set_body_level(int level) { body_level_ = level; }
+  void set_body_level(int level);
   int body_level() const;
+  // The vertex grouping of the current level; skinned() is in its order (its triangles renumbered to match).
+  const SkinLayout& skin_layout() const { return layout_; }
   // Deformed bodies of the last simulate(), empty when the rig has no body or skinning is off.
   const SkinnedCrowd& skinned() const { return skinned_; }
 
@@ -121,6 +123,7 @@ class CrowdScene {
   std::unique_ptr<const RetargetResult> mocap_;  // owns the clip and contacts mocap_rig_ points at
   std::unique_ptr<const MocapRig> mocap_rig_;
   int body_level_ = 0;
+  SkinLayout layout_;
   SkinnedCrowd skinned_;
 };
 

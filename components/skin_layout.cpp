@@ -1,0 +1,78 @@
+#include "components/skin_layout.h"
+
+#include <algorithm>
+#include <map>
+#include <numeric>
+
+#include "components/mesh.h"
+
+namespace strata {
+
+SkinLayout make_skin_layout(const BodyLevel& level) {
+  const Mesh& mesh = level.mesh;
+  const SkinBinding& binding = level.binding;
+  const std::size_t n = mesh.vertex_count();
+  Mesh with_normals;
+  const std::vector<glm::vec3>* normals = &mesh.normals;
+  if (mesh.normals.size() != n) {
+    with_normals = mesh;
+    compute_normals(with_normals);
+    normals = &with_normals.normals;
+  }
+  // Each vertex's influence set, joints sorted so {a, b} and {b, a} are one group.
+  struct Influence {
+    std::array<std::int16_t, kMaxInfluences> joints{};
+    std::array<float, kMaxInfluences> weights{};
+    std::uint32_t count = 0;
+  };
+  std::vector<Influence> inf(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    std::array<std::pair<std::int16_t, float>, kMaxInfluences> pairs{};
+    std::uint32_t c = 0;
+    float sum = 0.0f;
+    for (int k = 0; k < kMaxInfluences; ++k)
+      if (binding.weights[v][k] > 0.0f) {
+        pairs[c++] = {binding.joints[v][k], binding.weights[v][k]};
+        sum += binding.weights[v][k];
+      }
+    if (c == 0) pairs[c++] = {0, sum = 1.0f};  // unbound: follow the root rather than vanish
+    std::sort(pairs.begin(), pairs.begin() + c);
+    for (std::uint32_t k = 0; k < c; ++k) {
+      inf[v].joints[k] = pairs[k].first;
+      inf[v].weights[k] = pairs[k].second / sum;
+    }
+    inf[v].count = c;
+  }
+  // Order: by influence count, then joint set, then original index (stable, deterministic).
+  SkinLayout layout;
+  layout.vertex_count = static_cast<std::uint32_t>(n);
+  layout.original.resize(n);
+  std::iota(layout.original.begin(), layout.original.end(), 0u);
+  std::stable_sort(layout.original.begin(), layout.original.end(), [&](std::uint32_t a, std::uint32_t b) {
+    if (inf[a].count != inf[b].count) return inf[a].count < inf[b].count;
+    return inf[a].joints < inf[b].joints;
+  });
+  for (AlignedBuffer<float>* b : {&layout.px, &layout.py, &layout.pz, &layout.nx, &layout.ny, &layout.nz}) b->reset(n);
+  for (AlignedBuffer<float>& w : layout.weight) w.reset(n);
+  std::vector<std::uint32_t> rank(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t v = layout.original[i];
+    rank[v] = i;
+    const Influence& f = inf[v];
+    if (layout.groups.empty() || layout.groups.back().joints != f.joints || layout.groups.back().influences != f.count)
+      layout.groups.push_back({f.joints, f.count, i, 0});
+    ++layout.groups.back().count;
+    layout.px[i] = mesh.positions[v].x;
+    layout.py[i] = mesh.positions[v].y;
+    layout.pz[i] = mesh.positions[v].z;
+    layout.nx[i] = (*normals)[v].x;
+    layout.ny[i] = (*normals)[v].y;
+    layout.nz[i] = (*normals)[v].z;
+    for (std::uint32_t k = 0; k < f.count; ++k) layout.weight[k][i] = f.weights[k];
+  }
+  layout.triangles.resize(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) layout.triangles[t] = rank[mesh.triangles[t]];
+  return layout;
+}
+
+}  // namespace strata

@@ -1,0 +1,119 @@
+#include "systems/skin_kernel.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace strata {
+namespace {
+
+constexpr std::size_t kMaxJointsPerRig = 512;
+
+// One group's vertices [first, first + count) with `k` influences whose (placement-premultiplied) 3x4 matrices
+// are m[j][0..11]. Writes SoA results. Kept a plain loop over restrict pointers with no branches, so GCC
+// vectorises it (see fk.cpp for why the normal's guard is an add rather than a compare).
+template <int K>
+void skin_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count, const float (*m)[12], float* __restrict ox,
+                float* __restrict oy, float* __restrict oz, float* __restrict onx, float* __restrict ony,
+                float* __restrict onz) {
+  const float* __restrict px = L.px.data() + first;
+  const float* __restrict py = L.py.data() + first;
+  const float* __restrict pz = L.pz.data() + first;
+  const float* __restrict nx = L.nx.data() + first;
+  const float* __restrict ny = L.ny.data() + first;
+  const float* __restrict nz = L.nz.data() + first;
+  const float* __restrict w0 = L.weight[0].data() + first;
+  const float* __restrict w1 = L.weight[1].data() + first;
+  const float* __restrict w2 = L.weight[2].data() + first;
+  const float* __restrict w3 = L.weight[3].data() + first;
+  // A local copy: the compiler cannot prove the outputs never alias `m`, and would reload it every vertex.
+  float M[K][12];
+  for (int k = 0; k < K; ++k)
+    for (int c = 0; c < 12; ++c) M[k][c] = m[k][c];
+  // Outputs offset once and a 64-bit index: with `first + i` in 32 bits the addresses may wrap, which GCC
+  // cannot vectorise.
+  ox += first, oy += first, oz += first, onx += first, ony += first, onz += first;
+  const std::size_t n = count;
+  for (std::size_t i = 0; i < n; ++i) {
+    // Twelve named scalars rather than a float[12]: GCC keeps an array local in memory and then refuses to
+    // vectorise the vertex loop ("no vectype"); scalars it vectorises.
+    const float v0 = w0[i];
+    float v1 = 0.0f, v2 = 0.0f, v3 = 0.0f;
+    if constexpr (K > 1) v1 = w1[i];
+    if constexpr (K > 2) v2 = w2[i];
+    if constexpr (K > 3) v3 = w3[i];
+    auto blend = [&](int c) {
+      float r = v0 * M[0][c];
+      if constexpr (K > 1) r += v1 * M[1][c];
+      if constexpr (K > 2) r += v2 * M[2][c];
+      if constexpr (K > 3) r += v3 * M[3][c];
+      return r;
+    };
+    const float b0 = blend(0), b1 = blend(1), b2 = blend(2), b3 = blend(3), b4 = blend(4), b5 = blend(5);
+    const float b6 = blend(6), b7 = blend(7), b8 = blend(8), b9 = blend(9), b10 = blend(10), b11 = blend(11);
+    const float x = px[i], y = py[i], z = pz[i];
+    ox[i] = b0 * x + b3 * y + b6 * z + b9;
+    oy[i] = b1 * x + b4 * y + b7 * z + b10;
+    oz[i] = b2 * x + b5 * y + b8 * z + b11;
+    const float a = nx[i], c = ny[i], d = nz[i];
+    const float qx = b0 * a + b3 * c + b6 * d;
+    const float qy = b1 * a + b4 * c + b7 * d;
+    const float qz = b2 * a + b5 * c + b8 * d;
+    const float inv = 1.0f / std::sqrt(qx * qx + qy * qy + qz * qz + 1e-30f);
+    onx[i] = qx * inv;
+    ony[i] = qy * inv;
+    onz[i] = qz * inv;
+  }
+}
+
+__attribute__((target_clones("avx2,fma", "default"))) void skin_all_groups(const SkinLayout& L, const float (*world)[12],
+                                                                            float* ox, float* oy, float* oz, float* onx,
+                                                                            float* ony, float* onz) {
+  float m[kMaxInfluences][12];
+  for (const SkinGroup& g : L.groups) {
+    for (std::uint32_t k = 0; k < g.influences; ++k)
+      for (int c = 0; c < 12; ++c) m[k][c] = world[g.joints[k]][c];
+    switch (g.influences) {
+      case 1: skin_group<1>(L, g.first, g.count, m, ox, oy, oz, onx, ony, onz); break;
+      case 2: skin_group<2>(L, g.first, g.count, m, ox, oy, oz, onx, ony, onz); break;
+      case 3: skin_group<3>(L, g.first, g.count, m, ox, oy, oz, onx, ony, onz); break;
+      default: skin_group<4>(L, g.first, g.count, m, ox, oy, oz, onx, ony, onz); break;
+    }
+  }
+}
+
+}  // namespace
+
+void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, std::span<glm::vec3> out_positions,
+                 std::span<glm::vec3> out_normals) {
+  const std::size_t n = layout.vertex_count;
+  if (out_positions.size() < n || out_normals.size() < n)
+    throw std::invalid_argument("skin_walker: output spans shorter than the layout");
+  if (lanes.joints > kMaxJointsPerRig) throw std::invalid_argument("skin_walker: rig has too many joints");
+  // The walker's skinning matrices with its placement folded in (world = P * S_j), so the kernel writes world space.
+  const Placement P = placement_of(lanes, w);
+  static thread_local std::vector<float> scratch;
+  const std::size_t padded = pad_to_lanes(n);
+  scratch.resize(6 * padded + 12 * lanes.joints);
+  float (*world)[12] = reinterpret_cast<float (*)[12]>(scratch.data() + 6 * padded);
+  for (std::size_t j = 0; j < lanes.joints; ++j) {
+    float s[12];
+    for (int c = 0; c < 12; ++c) s[c] = lanes.skinning[(j * kAffineFloats + c) * lanes.stride + w];
+    for (int col = 0; col < 4; ++col) {
+      const glm::vec3 v{s[col * 3], s[col * 3 + 1], s[col * 3 + 2]};
+      const glm::vec3 r = col < 3 ? P.direction(P.scale * v) : P.point(v);
+      world[j][col * 3] = r.x;
+      world[j][col * 3 + 1] = r.y;
+      world[j][col * 3 + 2] = r.z;
+    }
+  }
+  float* ox = scratch.data();
+  float *oy = ox + padded, *oz = oy + padded, *onx = oz + padded, *ony = onx + padded, *onz = ony + padded;
+  skin_all_groups(layout, world, ox, oy, oz, onx, ony, onz);
+  for (std::size_t i = 0; i < n; ++i) {
+    out_positions[i] = {ox[i], oy[i], oz[i]};
+    out_normals[i] = {onx[i], ony[i], onz[i]};
+  }
+}
+
+}  // namespace strata

@@ -1,0 +1,24 @@
+#pragma once
+// The skinning kernel: linear blend skinning (the paper's equation 4) of one walker over a SkinLayout, SoA and
+// vectorised. Matrices are broadcast per influence group; per vertex it blends them with the vertex's weights
+// and transforms the rest position and normal (normals through the blended 3x3, renormalised).
+//
+// Runtime dispatch: the kernel is compiled twice (GCC target_clones: AVX2 + FMA, and the baseline x86-64 SSE2)
+// and the loader picks the one the CPU runs, so one binary is fast on AVX2 machines and still correct elsewhere.
+// systems/skin_reference.h is its scalar twin; tests hold the two to 1e-5 m.
+#include <span>
+
+#include <glm/vec3.hpp>
+
+#include "components/skin_layout.h"
+#include "components/walker.h"
+
+namespace strata {
+
+// Skins walker `w` of `lanes` (its skinning matrices and placement) into world space: out_positions and
+// out_normals get layout.vertex_count entries, in layout order. A blended normal of zero length comes out as
+// zero (not NaN); the reference falls back to the rest normal there.
+void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, std::span<glm::vec3> out_positions,
+                 std::span<glm::vec3> out_normals);
+
+}  // namespace strata
