@@ -212,6 +212,25 @@ TEST(StrataReport, SkinWritesLevelsBindingAndQuality) {
   }
 }
 
+TEST(StrataBench, TimesTheFullSimulationWithoutRendering) {
+  fs::path json = scratch("bench.json");
+  Result r = run("bench --walkers 8 --frames 5 --level 2 --threads 1 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(j.at("walkers"), 8);
+  EXPECT_EQ(j.at("frames"), 5);
+  EXPECT_EQ(j.at("vertices_per_walker"), 5133);
+  EXPECT_GT(j.at("frame_ms").get<double>(), 0.0);
+  EXPECT_NEAR(j.at("walkers_per_second").get<double>(), 8 * 1000.0 / j.at("frame_ms").get<double>(), 1e-6);
+  std::set<std::string> systems;
+  for (const auto& s : j.at("systems")) {
+    systems.insert(s.at("name").get<std::string>());
+    EXPECT_LE(s.at("mean_ms").get<double>(), s.at("max_ms").get<double>() + 1e-9);
+  }
+  for (const char* name : {"locomotion", "ik", "fk", "skin"}) EXPECT_TRUE(systems.count(name)) << name;
+  EXPECT_FALSE(systems.count("render")) << "bench renders nothing";
+}
+
 TEST(StrataReport, GaitWritesTheMeasuredTargets) {
   fs::path json = scratch("gait.json");
   Result r = run("report gait --walkers 4 --seconds 6 --json " + json.string());
