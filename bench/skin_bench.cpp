@@ -3,6 +3,8 @@
 // — on the same shipped-body level and pose, in one run. Items are vertices (positions and normals).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+
 #include <glm/mat4x4.hpp>
 #include <tbb/global_control.h>
 
@@ -79,6 +81,48 @@ void BM_SkinBaselineAos4x4(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<long>(in.size()));
 }
 BENCHMARK(BM_SkinBaselineAos4x4)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+
+// The same kernel on a level whose every vertex has exactly `influences` joints (the level's own weights replaced
+// by an even split over its first joint and its parents), to separate 1-, 2- and 4-influence throughput from the
+// level's natural mix.
+void BM_SkinKernelUniformInfluences(benchmark::State& state) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  Fixture f(0);
+  BodyLevel level = f.rig.body->levels[0];
+  const int k = static_cast<int>(state.range(0));
+  const Skeleton& s = f.rig.skeleton;
+  for (std::size_t v = 0; v < level.mesh.vertex_count(); ++v) {
+    std::int16_t j = level.binding.joints[v][0];
+    level.binding.joints[v] = {0, 0, 0, 0};
+    level.binding.weights[v] = {0.0f, 0.0f, 0.0f, 0.0f};
+    for (int i = 0; i < k; ++i) {
+      level.binding.joints[v][i] = j;
+      level.binding.weights[v][i] = 1.0f / static_cast<float>(k);
+      j = static_cast<std::int16_t>(std::max(s.parents[static_cast<std::size_t>(j)], 0));
+    }
+  }
+  const SkinLayout layout = make_skin_layout(level);
+  std::vector<glm::vec3> pos(layout.vertex_count), nrm(layout.vertex_count);
+  const WalkerLanes lanes = f.scene->lanes();
+  for (auto _ : state) {
+    skin_walker(layout, lanes, 0, pos, nrm);
+    benchmark::DoNotOptimize(pos.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<long>(layout.vertex_count));
+}
+BENCHMARK(BM_SkinKernelUniformInfluences)->Arg(1)->Arg(2)->Arg(4)->Unit(benchmark::kMicrosecond);
+
+// Memory-bandwidth ceiling for context: a streaming copy of 256 MB, counted as bytes read + written.
+void BM_MemoryCopyBandwidth(benchmark::State& state) {
+  const std::size_t n = std::size_t{64} << 20;  // floats: 256 MB
+  std::vector<float> a(n, 1.0f), b(n, 0.0f);
+  for (auto _ : state) {
+    std::copy(a.begin(), a.end(), b.begin());
+    benchmark::DoNotOptimize(b.data());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<long>(2 * n * sizeof(float)));
+}
+BENCHMARK(BM_MemoryCopyBandwidth)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
