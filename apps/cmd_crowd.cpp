@@ -114,7 +114,7 @@ int run_crowd(const CrowdOptions& o) {
             // Frame the crowd once from its first pose; a camera that re-fits every frame would pump. Bodies
             // reach past the joints (the skull above skullbase, the soles below the ankles).
             glm::vec3 lo, hi;
-            const bool any = bodies ? joint_bounds(scene.skinned().positions, lo, hi) : joint_bounds(joints, lo, hi);
+            const bool any = bodies ? scene.skinned().bounds(lo, hi) : joint_bounds(joints, lo, hi);
             if (any) camera.frame_box_tight(lo, hi, aspect);
           } else if (o.follow) {
             glm::vec3 lo, hi;

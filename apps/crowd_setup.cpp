@@ -123,14 +123,14 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
 
 BodyDrawInput body_draw_input(const CrowdScene& scene) {
   BodyDrawInput input;
-  const int level = scene.body_level();
-  if (level < 0) return input;
-  const SkinnedCrowd& skinned = scene.skinned();
+  if (scene.body_level() < 0) return input;
+  const SkinnedCrowd& s = scene.skinned();
   input.triangles = scene.skin_layout().triangles;
-  input.positions = skinned.positions;
-  input.normals = skinned.normals;
-  input.vertex_count = skinned.vertex_count;
-  input.walker_count = skinned.vertex_count ? scene.walker_count() : 0;
+  input.px = s.px.data(), input.py = s.py.data(), input.pz = s.pz.data();
+  input.nx = s.nx.data(), input.ny = s.ny.data(), input.nz = s.nz.data();
+  input.stride = s.stride;
+  input.vertex_count = s.vertex_count;
+  input.walker_count = s.vertex_count ? s.walkers : 0;
   return input;
 }
 

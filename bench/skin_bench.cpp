@@ -42,12 +42,14 @@ void BM_SkinKernel(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   Fixture f(static_cast<int>(state.range(0)));
   const SkinLayout& layout = f.scene->skin_layout();
-  std::vector<glm::vec3> pos(layout.vertex_count), nrm(layout.vertex_count);
+  const std::size_t padded = pad_to_lanes(layout.vertex_count);
+  AlignedBuffer<float> out(6 * padded);
+  const SkinOutput soa{out.data(), out.data() + padded, out.data() + 2 * padded, out.data() + 3 * padded,
+                       out.data() + 4 * padded, out.data() + 5 * padded};
   const WalkerLanes lanes = f.scene->lanes();
   for (auto _ : state) {
-    skin_walker(layout, lanes, 0, pos, nrm);
-    benchmark::DoNotOptimize(pos.data());
-    benchmark::DoNotOptimize(nrm.data());
+    skin_walker(layout, lanes, 0, soa);
+    benchmark::DoNotOptimize(out.data());
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(layout.vertex_count));
 }
@@ -102,11 +104,14 @@ void BM_SkinKernelUniformInfluences(benchmark::State& state) {
     }
   }
   const SkinLayout layout = make_skin_layout(level);
-  std::vector<glm::vec3> pos(layout.vertex_count), nrm(layout.vertex_count);
+  const std::size_t padded = pad_to_lanes(layout.vertex_count);
+  AlignedBuffer<float> out(6 * padded);
+  const SkinOutput soa{out.data(), out.data() + padded, out.data() + 2 * padded, out.data() + 3 * padded,
+                       out.data() + 4 * padded, out.data() + 5 * padded};
   const WalkerLanes lanes = f.scene->lanes();
   for (auto _ : state) {
-    skin_walker(layout, lanes, 0, pos, nrm);
-    benchmark::DoNotOptimize(pos.data());
+    skin_walker(layout, lanes, 0, soa);
+    benchmark::DoNotOptimize(out.data());
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(layout.vertex_count));
 }

@@ -178,6 +178,27 @@ void main() {
 }
 )";
 
+// Bodies arrive as six float arrays (the skin system's SoA); each is one attribute and the shader reassembles
+// the vectors, so the CPU never interleaves them.
+constexpr const char* kBodyVertexShader = R"(#version 450 core
+layout(location = 0) in float a_px;
+layout(location = 1) in float a_py;
+layout(location = 2) in float a_pz;
+layout(location = 3) in float a_nx;
+layout(location = 4) in float a_ny;
+layout(location = 5) in float a_nz;
+uniform mat4 u_view;
+uniform mat4 u_projection;
+out vec3 v_normal;
+out vec3 v_position;
+void main() {
+  vec4 view_position = u_view * vec4(a_px, a_py, a_pz, 1.0);
+  v_position = view_position.xyz;
+  v_normal = mat3(u_view) * vec3(a_nx, a_ny, a_nz);
+  gl_Position = u_projection * view_position;
+}
+)";
+
 // The ground quad is generated from gl_VertexID (no vertex buffer); the core profile still needs a bound VAO.
 constexpr const char* kGroundVertexShader = R"(#version 450 core
 uniform mat4 u_view;
@@ -343,9 +364,9 @@ struct SkeletonRenderer::Impl {
   // Kept between frames so steady-state rendering does not allocate.
   std::vector<InstanceRows> bone_instances, joint_instances;
 
-  // Bodies: positions and normals re-specified per frame (orphaning, as for instances); the index buffer only
-  // when the topology changes. One identity instance lets the mesh program draw them unchanged.
-  GLuint body_vao = 0, body_positions = 0, body_normals = 0, body_indices = 0, body_instance = 0;
+  // Bodies: the six component arrays re-specified per frame in one buffer (orphaning, as for instances); the
+  // index buffer only when the topology changes.
+  GLuint body_program = 0, body_vao = 0, body_components = 0, body_indices = 0;
   const std::uint32_t* body_topology = nullptr;
   std::size_t body_index_count = 0, body_vertex_count = 0;
   std::vector<GLsizei> body_counts;
@@ -353,29 +374,18 @@ struct SkeletonRenderer::Impl {
   std::vector<GLint> body_base_vertices;
 
   void create_body_vao() {
-    glCreateBuffers(1, &body_positions);
-    glCreateBuffers(1, &body_normals);
+    glCreateBuffers(1, &body_components);
     glCreateBuffers(1, &body_indices);
-    glCreateBuffers(1, &body_instance);
-    const InstanceRows identity = to_rows(glm::mat4(1.0f));
-    glNamedBufferStorage(body_instance, sizeof identity, &identity, 0);
     glCreateVertexArrays(1, &body_vao);
-    glVertexArrayVertexBuffer(body_vao, 0, body_positions, 0, sizeof(glm::vec3));
-    glVertexArrayVertexBuffer(body_vao, 1, body_instance, 0, sizeof(InstanceRows));
-    glVertexArrayVertexBuffer(body_vao, 2, body_normals, 0, sizeof(glm::vec3));
-    glVertexArrayBindingDivisor(body_vao, 1, 1);
     glVertexArrayElementBuffer(body_vao, body_indices);
-    auto attribute = [&](GLuint location, GLuint binding, GLint size, GLuint offset) {
-      glEnableVertexArrayAttrib(body_vao, location);
-      glVertexArrayAttribFormat(body_vao, location, size, GL_FLOAT, GL_FALSE, offset);
-      glVertexArrayAttribBinding(body_vao, location, binding);
-    };
-    attribute(0, 0, 3, 0);
-    attribute(1, 2, 3, 0);
-    for (GLuint i = 0; i < 3; ++i) attribute(2 + i, 1, 4, static_cast<GLuint>(i * sizeof(glm::vec4)));
+    for (GLuint a = 0; a < 6; ++a) {
+      glEnableVertexArrayAttrib(body_vao, a);
+      glVertexArrayAttribFormat(body_vao, a, 1, GL_FLOAT, GL_FALSE, 0);
+      glVertexArrayAttribBinding(body_vao, a, a);
+    }
   }
 
-  void draw_bodies(const BodyDrawInput& b, GLuint program, GLint color_location) {
+  void draw_bodies(const BodyDrawInput& b, const glm::mat4& view, const glm::mat4& projection) {
     if (b.walker_count == 0 || b.triangles.empty()) return;
     if (b.triangles.data() != body_topology || b.triangles.size() != body_index_count ||
         b.vertex_count != body_vertex_count) {
@@ -385,18 +395,24 @@ struct SkeletonRenderer::Impl {
       body_index_count = b.triangles.size();
       body_vertex_count = b.vertex_count;
     }
-    const std::size_t n = b.walker_count * b.vertex_count;
-    glNamedBufferData(body_positions, static_cast<GLsizeiptr>(n * sizeof(glm::vec3)), b.positions.data(),
-                      GL_STREAM_DRAW);
-    glNamedBufferData(body_normals, static_cast<GLsizeiptr>(n * sizeof(glm::vec3)), b.normals.data(),
-                      GL_STREAM_DRAW);
+    const std::size_t floats = b.walker_count * b.stride;
+    const GLsizeiptr bytes = static_cast<GLsizeiptr>(floats * sizeof(float));
+    glNamedBufferData(body_components, 6 * bytes, nullptr, GL_STREAM_DRAW);
+    const float* arrays[6] = {b.px, b.py, b.pz, b.nx, b.ny, b.nz};
+    for (GLuint a = 0; a < 6; ++a) {
+      glNamedBufferSubData(body_components, a * bytes, bytes, arrays[a]);
+      glVertexArrayVertexBuffer(body_vao, a, body_components, a * bytes, sizeof(float));
+    }
     // One multi-draw: the shared index list once per walker, offset by its first vertex.
     body_counts.assign(b.walker_count, static_cast<GLsizei>(b.triangles.size()));
     body_offsets.assign(b.walker_count, nullptr);
     body_base_vertices.resize(b.walker_count);
-    for (std::size_t w = 0; w < b.walker_count; ++w)
-      body_base_vertices[w] = static_cast<GLint>(w * b.vertex_count);
-    glProgramUniform3fv(program, color_location, 1, glm::value_ptr(options.skin_color));
+    for (std::size_t w = 0; w < b.walker_count; ++w) body_base_vertices[w] = static_cast<GLint>(w * b.stride);
+    const GLuint p = body_program;
+    glUseProgram(p);
+    glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));
+    glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));
+    glProgramUniform3fv(p, glGetUniformLocation(p, "u_color"), 1, glm::value_ptr(options.skin_color));
     glBindVertexArray(body_vao);
     glMultiDrawElementsBaseVertex(GL_TRIANGLES, body_counts.data(), GL_UNSIGNED_INT, body_offsets.data(),
                                   static_cast<GLsizei>(b.walker_count), body_base_vertices.data());
@@ -444,9 +460,10 @@ struct SkeletonRenderer::Impl {
     destroy_mesh(bone);
     destroy_mesh(joint);
     glDeleteVertexArrays(1, &body_vao);
-    const GLuint body_buffers[] = {body_positions, body_normals, body_indices, body_instance};
-    glDeleteBuffers(4, body_buffers);
-    body_vao = body_positions = body_normals = body_indices = body_instance = 0;
+    const GLuint body_buffers[] = {body_components, body_indices};
+    glDeleteBuffers(2, body_buffers);
+    glDeleteProgram(body_program);
+    body_vao = body_components = body_indices = body_program = 0;
     glDeleteVertexArrays(1, &ground_vao);
     glDeleteProgram(mesh_program);
     glDeleteProgram(ground_program);
@@ -538,6 +555,7 @@ SkeletonRenderer::SkeletonRenderer(int width, int height, SkeletonRenderOptions 
     r.ground_program = link_program(kGroundVertexShader, kGroundFragmentShader, "ground");
     r.bone = upload_mesh(make_bone_mesh());
     r.joint = upload_mesh(make_sphere_mesh());
+    r.body_program = link_program(kBodyVertexShader, kMeshFragmentShader, "body");
     r.create_body_vao();
     glCreateVertexArrays(1, &r.ground_vao);
     r.create_targets();
@@ -569,12 +587,12 @@ void SkeletonRenderer::resize(int width, int height) {
 void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
                               const BodyDrawInput* bodies) {
   Impl& r = *impl_;
-  if (bodies) {
-    const std::size_t n = bodies->walker_count * bodies->vertex_count;
-    if (bodies->positions.size() < n || bodies->normals.size() < n || bodies->triangles.size() % 3 != 0)
-      throw std::invalid_argument("skeleton renderer: body positions/normals/triangles do not match " +
-                                  std::to_string(bodies->walker_count) + " walkers of " +
-                                  std::to_string(bodies->vertex_count) + " vertices");
+  if (bodies && bodies->walker_count > 0) {
+    const BodyDrawInput& b = *bodies;
+    if (!b.px || !b.py || !b.pz || !b.nx || !b.ny || !b.nz || b.stride < b.vertex_count || b.triangles.size() % 3 != 0)
+      throw std::invalid_argument("skeleton renderer: body arrays/triangles do not describe " +
+                                  std::to_string(b.walker_count) + " walkers of " + std::to_string(b.vertex_count) +
+                                  " vertices");
     // Indices are checked when the topology changes (they are uploaded then), not every frame.
     if (bodies->triangles.data() != r.body_topology || bodies->triangles.size() != r.body_index_count ||
         bodies->vertex_count != r.body_vertex_count)
@@ -645,7 +663,7 @@ void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& v
     draw(r.bone, r.bone_instances, o.bone_color);
     draw(r.joint, r.joint_instances, o.joint_color);
   }
-  if (bodies) r.draw_bodies(*bodies, p, color_location);
+  if (bodies) r.draw_bodies(*bodies, view, projection);
   glBindVertexArray(0);
 
   glBlitNamedFramebuffer(r.msaa_fbo, r.resolve_fbo, 0, 0, r.width, r.height, 0, 0, r.width, r.height,

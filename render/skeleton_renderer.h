@@ -25,12 +25,13 @@ struct SkeletonDrawInput {
   std::size_t walker_count = 0;
 };
 
-// Skinned bodies: per-walker deformed vertices already in world space, sharing one triangle list (every walker
-// of a draw uses the same mesh level). Drawn lit in the skin colour.
+// Skinned bodies: per-walker deformed vertices already in world space, as six component arrays (SoA, the skin
+// system's output), sharing one triangle list (every walker of a draw uses the same mesh level). Walker w's
+// vertex v is element w * stride + v of each array. Drawn lit in the skin colour.
 struct BodyDrawInput {
   std::span<const std::uint32_t> triangles;
-  std::span<const glm::vec3> positions;  // walker-major: vertex v of walker w at [w * vertex_count + v]
-  std::span<const glm::vec3> normals;    // same layout, unit length
+  const float *px = nullptr, *py = nullptr, *pz = nullptr, *nx = nullptr, *ny = nullptr, *nz = nullptr;
+  std::size_t stride = 0;        // >= vertex_count
   std::size_t vertex_count = 0;
   std::size_t walker_count = 0;
 };

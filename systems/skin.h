@@ -11,14 +11,30 @@
 
 #include "components/body.h"
 #include "components/skin_layout.h"
+#include "ecs/aligned_buffer.h"
 #include "components/walker.h"
 
 namespace strata {
 
+// Deformed bodies, SoA: component arrays px .. nz, each walker's block of vertex_count values starting at
+// w * stride (stride = vertex_count padded to the SIMD width, so every block is 64-byte aligned). The renderer
+// reads these arrays as they are; an interleaved copy would double the pass's memory traffic.
 struct SkinnedCrowd {
-  std::size_t vertex_count = 0;     // per walker
-  std::vector<glm::vec3> positions;  // world space, layout order; walker w's vertex v at [w * vertex_count + v]
-  std::vector<glm::vec3> normals;
+  std::size_t vertex_count = 0;  // per walker, layout order
+  std::size_t stride = 0;
+  std::size_t walkers = 0;
+  AlignedBuffer<float> px, py, pz, nx, ny, nz;
+
+  glm::vec3 position(std::size_t walker, std::size_t v) const {
+    const std::size_t i = walker * stride + v;
+    return {px[i], py[i], pz[i]};
+  }
+  glm::vec3 normal(std::size_t walker, std::size_t v) const {
+    const std::size_t i = walker * stride + v;
+    return {nx[i], ny[i], nz[i]};
+  }
+  // Axis-aligned bounds of every vertex of every walker; false when empty.
+  bool bounds(glm::vec3& lo, glm::vec3& hi) const;
 };
 
 void skin_system(const SkinLayout& layout, const WalkerLanes& lanes, SkinnedCrowd& out);

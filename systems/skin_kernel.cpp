@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <stdexcept>
-#include <vector>
 
 namespace strata {
 namespace {
@@ -82,31 +81,13 @@ __attribute__((target_clones("avx2,fma", "default"))) void skin_all_groups(const
   }
 }
 
-// SoA -> the renderer's interleaved vec3, compiled for AVX2 too (it is half the memory traffic of the pass).
-__attribute__((target_clones("avx2,fma", "default"))) void interleave(const float* __restrict x, const float* __restrict y,
-                                                                       const float* __restrict z, float* __restrict out,
-                                                                       std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) {
-    out[3 * i] = x[i];
-    out[3 * i + 1] = y[i];
-    out[3 * i + 2] = z[i];
-  }
-}
-
 }  // namespace
 
-void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, std::span<glm::vec3> out_positions,
-                 std::span<glm::vec3> out_normals) {
-  const std::size_t n = layout.vertex_count;
-  if (out_positions.size() < n || out_normals.size() < n)
-    throw std::invalid_argument("skin_walker: output spans shorter than the layout");
+void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, const SkinOutput& out) {
   if (lanes.joints > kMaxJointsPerRig) throw std::invalid_argument("skin_walker: rig has too many joints");
   // The walker's skinning matrices with its placement folded in (world = P * S_j), so the kernel writes world space.
   const Placement P = placement_of(lanes, w);
-  static thread_local std::vector<float> scratch;
-  const std::size_t padded = pad_to_lanes(n);
-  scratch.resize(6 * padded + 12 * lanes.joints);
-  float (*world)[12] = reinterpret_cast<float (*)[12]>(scratch.data() + 6 * padded);
+  float world[kMaxJointsPerRig][12];
   for (std::size_t j = 0; j < lanes.joints; ++j) {
     float s[12];
     for (int c = 0; c < 12; ++c) s[c] = lanes.skinning[(j * kAffineFloats + c) * lanes.stride + w];
@@ -118,12 +99,7 @@ void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t
       world[j][col * 3 + 2] = r.z;
     }
   }
-  float* ox = scratch.data();
-  float *oy = ox + padded, *oz = oy + padded, *onx = oz + padded, *ony = onx + padded, *onz = ony + padded;
-  skin_all_groups(layout, world, ox, oy, oz, onx, ony, onz);
-  static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "glm::vec3 is three packed floats");
-  interleave(ox, oy, oz, reinterpret_cast<float*>(out_positions.data()), n);
-  interleave(onx, ony, onz, reinterpret_cast<float*>(out_normals.data()), n);
+  skin_all_groups(layout, world, out.px, out.py, out.pz, out.nx, out.ny, out.nz);
 }
 
 }  // namespace strata

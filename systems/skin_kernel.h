@@ -15,10 +15,14 @@
 
 namespace strata {
 
-// Skins walker `w` of `lanes` (its skinning matrices and placement) into world space: out_positions and
-// out_normals get layout.vertex_count entries, in layout order. A blended normal of zero length comes out as
-// zero (not NaN); the reference falls back to the rest normal there.
-void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, std::span<glm::vec3> out_positions,
-                 std::span<glm::vec3> out_normals);
+// Where one walker's skinned vertices go: six component arrays of at least layout.vertex_count floats (padded
+// to the SIMD width: the kernel may write whole vectors).
+struct SkinOutput {
+  float *px, *py, *pz, *nx, *ny, *nz;
+};
+
+// Skins walker `w` of `lanes` (its skinning matrices and placement) into world space, layout order. A blended
+// normal of zero length comes out as zero (not NaN); the reference falls back to the rest normal there.
+void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, const SkinOutput& out);
 
 }  // namespace strata

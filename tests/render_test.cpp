@@ -326,7 +326,15 @@ TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
   add_box({0.4f, 0.3f, -0.2f}, {0.8f, 1.2f, 0.2f}, positions, normals, nullptr);  // walker 2, same topology
   renderer_->options().draw_ground = false;
   renderer_->options().draw_skeleton = false;
-  BodyDrawInput bodies{triangles, positions, normals, per_walker, 2};
+  // The renderer takes the skin system's SoA: six component arrays, walker blocks `stride` apart.
+  std::vector<float> soa[6];
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    for (int c = 0; c < 3; ++c) {
+      soa[c].push_back(positions[v][c]);
+      soa[3 + c].push_back(normals[v][c]);
+    }
+  BodyDrawInput bodies{triangles, soa[0].data(), soa[1].data(), soa[2].data(), soa[3].data(), soa[4].data(),
+                       soa[5].data(), per_walker, per_walker, 2};
   const OrbitCamera camera = figure_camera();
   renderer_->render(SkeletonDrawInput{}, camera.view(), camera.projection(kAspect), &bodies);
   std::vector<std::uint8_t> image;
@@ -353,7 +361,8 @@ TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
   }
   std::vector<std::uint32_t> bad = triangles;
   bad[5] = static_cast<std::uint32_t>(per_walker);
-  BodyDrawInput broken{bad, positions, normals, per_walker, 2};
+  BodyDrawInput broken = bodies;
+  broken.triangles = bad;
   EXPECT_THROW(renderer_->render(SkeletonDrawInput{}, view, projection, &broken), std::invalid_argument);
 }
 

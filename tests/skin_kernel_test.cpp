@@ -62,7 +62,10 @@ TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
     const SkinLayout& layout = scene.skin_layout();
     const BodyLevel& body = rig.body->levels[static_cast<std::size_t>(level)];
     Profiler profiler(8, false);
-    std::vector<glm::vec3> pos(layout.vertex_count), nrm(layout.vertex_count);
+    const std::size_t padded = pad_to_lanes(layout.vertex_count);
+    std::vector<float> out(6 * padded);
+    const SkinOutput soa{out.data(), out.data() + padded, out.data() + 2 * padded, out.data() + 3 * padded,
+                         out.data() + 4 * padded, out.data() + 5 * padded};
     float worst_p = 0.0f, worst_n = 0.0f;
     for (int trial = 0; trial < 6; ++trial) {
       scene.simulate(0.13f, profiler);
@@ -76,14 +79,15 @@ TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
         fk_system(rig.skeleton, lanes);
       }
       for (std::size_t w = 0; w < lanes.count; ++w) {
-        skin_walker(layout, lanes, w, pos, nrm);
+        skin_walker(layout, lanes, w, soa);
         const SkinnedVertices ref = skin_reference(body.mesh, body.binding, lanes, w);
         const Placement P = placement_of(lanes, w);
         for (std::size_t i = 0; i < layout.vertex_count; ++i) {
           const std::uint32_t v = layout.original[i];
-          worst_p = std::max(worst_p, glm::length(P.point(ref.positions[v]) - pos[i]));
-          worst_n = std::max(worst_n, glm::length(P.direction(ref.normals[v]) - nrm[i]));
-          ASSERT_TRUE(std::isfinite(pos[i].x + pos[i].y + pos[i].z + nrm[i].x + nrm[i].y + nrm[i].z));
+          const glm::vec3 pos{soa.px[i], soa.py[i], soa.pz[i]}, nrm{soa.nx[i], soa.ny[i], soa.nz[i]};
+          worst_p = std::max(worst_p, glm::length(P.point(ref.positions[v]) - pos));
+          worst_n = std::max(worst_n, glm::length(P.direction(ref.normals[v]) - nrm));
+          ASSERT_TRUE(std::isfinite(pos.x + pos.y + pos.z + nrm.x + nrm.y + nrm.z));
         }
       }
     }
@@ -95,7 +99,7 @@ TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
 TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
   Rig rig = to_rig(load_default_humanoid());
   rig.body = default_bound_body();
-  std::vector<glm::vec3> result[2];
+  std::vector<float> result[2];
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     CrowdScene scene(rig);
@@ -106,7 +110,9 @@ TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
     scene.set_body_level(2);
     Profiler profiler(8, false);
     for (int f = 0; f < 5; ++f) scene.simulate(1.0f / 30.0f, profiler);
-    result[threads - 1] = scene.skinned().positions;
+    const SkinnedCrowd& s = scene.skinned();
+    for (const AlignedBuffer<float>* b : {&s.px, &s.py, &s.pz, &s.nx, &s.ny, &s.nz})
+      result[threads - 1].insert(result[threads - 1].end(), b->data(), b->data() + s.walkers * s.stride);
   }
   ASSERT_EQ(result[0].size(), result[1].size());
   EXPECT_TRUE(result[0] == result[1]);
