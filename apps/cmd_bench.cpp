@@ -6,10 +6,10 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 
 #include "apps/commands.h"
+#include "apps/json_output.h"
 #include "apps/crowd_setup.h"
 
 namespace strata::cli {
@@ -56,11 +56,7 @@ int run_bench(const BenchOptions& o) {
       systems.push_back({{"name", s.name}, {"mean_ms", s.mean_ms}, {"p95_ms", s.p95_ms}, {"min_ms", s.min_ms},
                          {"max_ms", s.max_ms}});
     j["systems"] = systems;
-    if (!o.json.empty()) {
-      std::ofstream out(o.json);
-      out << j.dump(2) << "\n";
-      if (!out) throw std::runtime_error("cannot write " + o.json);
-    }
+    if (!o.json.empty()) write_json_file(o.json, j);
     std::printf("strata bench: %zu walkers x %zu frames, level %d (%zu vertices each), %d threads: %.2f ms/frame, "
                 "%.0f walker-frames/s\n",
                 scene->walker_count(), o.frames, scene->body_level(), vertices, threads, frame_ms,

@@ -9,10 +9,10 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 
 #include "apps/commands.h"
+#include "apps/json_output.h"
 #include "apps/crowd_setup.h"
 #include "io/image_writer.h"
 #include "profiling/profiler.h"
@@ -172,11 +172,7 @@ int run_crowd(const CrowdOptions& o) {
       systems.push_back({{"name", s.name}, {"samples", s.samples}, {"min_ms", s.min_ms}, {"mean_ms", s.mean_ms},
                          {"p95_ms", s.p95_ms}, {"max_ms", s.max_ms}});
     summary["systems"] = systems;
-    {
-      std::ofstream out(fs::path(o.out) / "summary.json");
-      out << summary.dump(2) << "\n";
-      if (!out) throw std::runtime_error("cannot write " + (fs::path(o.out) / "summary.json").string());
-    }
+    write_json_file(fs::path(o.out) / "summary.json", summary);
 
     std::cout << "strata crowd: " << scene.walker_count() << " walkers x " << o.frames << " frames, "
               << scene.rig().skeleton.joint_count() << " joints each, " << o.width << "x" << o.height << " on "

@@ -4,10 +4,10 @@
 #include <tbb/global_control.h>
 
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 
 #include "apps/commands.h"
+#include "apps/json_output.h"
 #include "apps/crowd_setup.h"
 #include "systems/gait_metrics.h"
 
@@ -69,11 +69,7 @@ int run_gait_report(const GaitReportOptions& o) {
     for (const SystemStats& s : profiler.stats())
       systems.push_back({{"name", s.name}, {"mean_ms", s.mean_ms}, {"p95_ms", s.p95_ms}});
     j["systems"] = systems;
-    if (!o.json.empty()) {
-      std::ofstream out(o.json);
-      out << j.dump(2) << "\n";
-      if (!out) throw std::runtime_error("cannot write " + o.json);
-    }
+    if (!o.json.empty()) write_json_file(o.json, j);
     auto line = [](const char* name, double value, const char* target, bool ok) {
       std::printf("%-26s %14.6g   %-12s %s\n", name, value, target, ok ? "ok" : "MISSED");
     };

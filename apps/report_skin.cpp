@@ -6,13 +6,13 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <set>
 
 #include <glm/gtc/quaternion.hpp>
 
 #include "apps/commands.h"
+#include "apps/json_output.h"
 #include "io/hanim_loader.h"
 #include "rig/binding.h"
 #include "rig/body_generator.h"
@@ -153,11 +153,7 @@ int run_skin_report(const SkinReportOptions& o) {
     out["walk_seconds"] = o.seconds;
     out["flexion_deg"] = 120;
     out["targets_met"] = targets;
-    if (!o.json.empty()) {
-      std::ofstream f(o.json);
-      f << out.dump(2) << "\n";
-      if (!f) throw std::runtime_error("cannot write " + o.json);
-    }
+    if (!o.json.empty()) write_json_file(o.json, out);
     std::printf("cage: %zu vertices, %zu triangles; targets %s\n", levels.cage.vertex_count(),
                 levels.cage.triangle_count(), targets ? "met" : "MISSED");
   } catch (const std::exception& e) {

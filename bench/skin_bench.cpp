@@ -38,20 +38,23 @@ struct Fixture {
   }
 };
 
-void BM_SkinKernel(benchmark::State& state) {
-  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-  Fixture f(static_cast<int>(state.range(0)));
-  const SkinLayout& layout = f.scene->skin_layout();
+// Times skin_walker on walker 0; items are vertices.
+void time_kernel(benchmark::State& state, const SkinLayout& layout, const WalkerLanes& lanes) {
   const std::size_t padded = pad_to_lanes(layout.vertex_count);
   AlignedBuffer<float> out(6 * padded);
-  const SkinOutput soa{out.data(), out.data() + padded, out.data() + 2 * padded, out.data() + 3 * padded,
-                       out.data() + 4 * padded, out.data() + 5 * padded};
-  const WalkerLanes lanes = f.scene->lanes();
+  const SkinOutput soa = skin_output_in(out.data(), padded);
   for (auto _ : state) {
     skin_walker(layout, lanes, 0, soa);
     benchmark::DoNotOptimize(out.data());
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(layout.vertex_count));
+}
+
+void BM_SkinKernel(benchmark::State& state) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  Fixture f(static_cast<int>(state.range(0)));
+  const SkinLayout& layout = f.scene->skin_layout();
+  time_kernel(state, layout, f.scene->lanes());
 }
 BENCHMARK(BM_SkinKernel)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
@@ -104,16 +107,7 @@ void BM_SkinKernelUniformInfluences(benchmark::State& state) {
     }
   }
   const SkinLayout layout = make_skin_layout(level);
-  const std::size_t padded = pad_to_lanes(layout.vertex_count);
-  AlignedBuffer<float> out(6 * padded);
-  const SkinOutput soa{out.data(), out.data() + padded, out.data() + 2 * padded, out.data() + 3 * padded,
-                       out.data() + 4 * padded, out.data() + 5 * padded};
-  const WalkerLanes lanes = f.scene->lanes();
-  for (auto _ : state) {
-    skin_walker(layout, lanes, 0, soa);
-    benchmark::DoNotOptimize(out.data());
-  }
-  state.SetItemsProcessed(state.iterations() * static_cast<long>(layout.vertex_count));
+  time_kernel(state, layout, f.scene->lanes());
 }
 BENCHMARK(BM_SkinKernelUniformInfluences)->Arg(1)->Arg(2)->Arg(4)->Unit(benchmark::kMicrosecond);
 

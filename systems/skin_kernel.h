@@ -21,6 +21,11 @@ struct SkinOutput {
   float *px, *py, *pz, *nx, *ny, *nz;
 };
 
+// The six arrays laid end to end in one block of 6 * stride floats (stride >= vertex count, a SIMD multiple).
+inline SkinOutput skin_output_in(float* block, std::size_t stride) {
+  return {block, block + stride, block + 2 * stride, block + 3 * stride, block + 4 * stride, block + 5 * stride};
+}
+
 // Skins walker `w` of `lanes` (its skinning matrices and placement) into world space, layout order. A blended
 // normal of zero length comes out as zero (not NaN); the reference falls back to the rest normal there.
 void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, const SkinOutput& out);

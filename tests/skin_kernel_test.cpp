@@ -64,8 +64,7 @@ TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
     Profiler profiler(8, false);
     const std::size_t padded = pad_to_lanes(layout.vertex_count);
     std::vector<float> out(6 * padded);
-    const SkinOutput soa{out.data(), out.data() + padded, out.data() + 2 * padded, out.data() + 3 * padded,
-                         out.data() + 4 * padded, out.data() + 5 * padded};
+    const SkinOutput soa = skin_output_in(out.data(), padded);
     float worst_p = 0.0f, worst_n = 0.0f;
     for (int trial = 0; trial < 6; ++trial) {
       scene.simulate(0.13f, profiler);
