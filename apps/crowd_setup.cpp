@@ -4,6 +4,7 @@
 #include <tbb/info.h>
 
 #include <charconv>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -12,7 +13,10 @@
 #include "motion/retarget.h"
 #include "io/gltf.h"
 #include "io/makehuman.h"
+#include "io/load_error.h"
+#include "io/muscle_file.h"
 #include "rig/body_rig.h"
+#include "rig/muscle_binding.h"
 #include "rig/skin_from_skeleton.h"
 #include "systems/animation_sample.h"
 
@@ -37,7 +41,35 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   cmd.add_option("--level", o.level,
                  "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133), or -1 for skeletons only")
       ->capture_default_str()->check(CLI::Range(-1, 2));
+  cmd.add_option("--muscles", o.muscles,
+                 "Muscle layer: 'default' (the shipped 12 action lines, data/muscles.json), 'none', or a muscle "
+                 "file (format: io/muscle_file.h)")->capture_default_str();
+  cmd.add_option("--muscle-gain", o.muscle_gain, "Scale every muscle's forces (0 = no bulge, 1 = as in the file)")
+      ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));
+  cmd.add_option("--muscle-overrides", o.muscle_overrides,
+                 "JSON file of per-muscle gains, e.g. {\"gain\": 1, \"muscles\": {\"l_biceps\": 2}}");
 }
+
+namespace {
+
+// The muscle layer --muscles asks for, bound to the rig's body.
+void attach_muscles(Rig& rig, const SceneOptions& o, bool default_rig) {
+  if (o.muscles == "none" || !rig.body) return;
+  if (o.muscles == "default" && default_rig) {
+    rig.muscles = default_muscle_rig();
+    return;
+  }
+  try {
+    MuscleSet set = o.muscles == "default" ? default_muscles(rig.skeleton) : load_muscle_file(o.muscles, rig.skeleton);
+    rig.muscles = bind_muscle_rig(std::move(set), *rig.body);
+  } catch (const LoadError& e) {
+    // The shipped muscles name the shipped skeleton's joints; a foreign rig without them just has no muscles.
+    if (o.muscles != "default") throw;
+    std::fprintf(stderr, "note: no muscle layer for this rig (%s)\n", e.what());
+  }
+}
+
+}  // namespace
 
 int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
   if (rest || rig.clips.empty()) {
@@ -93,6 +125,7 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
       }
     }
   }
+  attach_muscles(rig, o, o.mesh.empty() && o.skeleton.empty());
   CrowdConfig config;
   config.walkers = o.walkers;
   config.seed = o.seed;
@@ -118,6 +151,12 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
   }
   scene->spawn_crowd(config);
   scene->set_body_level(o.level);
+  if (scene->has_muscles()) {
+    MuscleGains gains = o.muscle_overrides.empty() ? MuscleGains{}
+                                                   : load_muscle_overrides(o.muscle_overrides, scene->rig().muscles->set);
+    gains.global *= o.muscle_gain;
+    scene->set_muscle_gains(std::move(gains));
+  }
   return scene;
 }
 

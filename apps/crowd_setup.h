@@ -24,9 +24,13 @@ struct SceneOptions {
   float spacing = 1.25f;
   int threads = 0;       // 0 = all cores
   int level = 0;         // body resolution level drawn (0 finest .. 2); -1 = no body, skeletons only
+  std::string muscles = "default";  // "default" (data/muscles.json), "none", or a muscle file
+  float muscle_gain = 1.0f;         // scales every muscle's forces
+  std::string muscle_overrides;     // per-muscle gains file (io/muscle_file.h)
 };
 
-// Registers --walkers, --skeleton, --clip, --rest, --seed, --spacing and --threads on `cmd`.
+// Registers --walkers, --skeleton, --clip, --rest, --seed, --spacing, --threads, --level and the muscle options
+// (--muscles, --muscle-gain, --muscle-overrides) on `cmd`.
 void add_scene_options(CLI::App& cmd, SceneOptions& options);
 
 // Resolves --clip to a walker clip selector: a clip name or index, "all" (every clip at once, as an X3D browser

@@ -1,7 +1,7 @@
 #pragma once
 // Rig: the immutable data every walker of one body shares (stored once, referenced by id from walker tables).
-// A skeleton, its animation clips and optionally its body (rest meshes per level with their skin binding);
-// later layers add action lines here, never per walker.
+// A skeleton, its animation clips and optionally its body (rest meshes per level with their skin binding) and
+// muscle layer (action lines and their binding to each body level); never per walker.
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -10,6 +10,7 @@
 
 #include "components/animation_clip.h"
 #include "components/body.h"
+#include "components/muscle.h"
 #include "components/skeleton.h"
 
 namespace strata {
@@ -19,6 +20,7 @@ struct Rig {
   Skeleton skeleton;
   std::vector<AnimationClip> clips;
   std::shared_ptr<const Body> body;  // null: a skeleton only
+  std::shared_ptr<const MuscleRig> muscles;  // null: no muscle layer; else levels match body->levels
 };
 
 using RigId = std::uint32_t;

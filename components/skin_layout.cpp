@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <map>
 #include <numeric>
+#include <stdexcept>
 
 #include "components/mesh.h"
 
 namespace strata {
 
-SkinLayout make_skin_layout(const BodyLevel& level) {
+SkinLayout make_skin_layout(const BodyLevel& level, const MuscleBinding* muscles) {
   const Mesh& mesh = level.mesh;
   const SkinBinding& binding = level.binding;
   const std::size_t n = mesh.vertex_count();
@@ -43,6 +44,11 @@ SkinLayout make_skin_layout(const BodyLevel& level) {
     }
     inf[v].count = c;
   }
+  std::vector<std::uint32_t> slot(n, SkinLayout::kNoMuscle);
+  if (muscles)
+    for (std::uint32_t b = 0; b < muscles->size(); ++b)
+      if (muscles->vertex[b] < n) slot[muscles->vertex[b]] = b;
+  auto bound = [&](std::uint32_t v) { return slot[v] != SkinLayout::kNoMuscle; };
   // Order: by influence count, then joint set, then original index (stable, deterministic).
   SkinLayout layout;
   layout.vertex_count = static_cast<std::uint32_t>(n);
@@ -50,17 +56,31 @@ SkinLayout make_skin_layout(const BodyLevel& level) {
   std::iota(layout.original.begin(), layout.original.end(), 0u);
   std::stable_sort(layout.original.begin(), layout.original.end(), [&](std::uint32_t a, std::uint32_t b) {
     if (inf[a].count != inf[b].count) return inf[a].count < inf[b].count;
-    return inf[a].joints < inf[b].joints;
+    if (inf[a].joints != inf[b].joints) return inf[a].joints < inf[b].joints;
+    return bound(a) < bound(b);
   });
   for (AlignedBuffer<float>* b : {&layout.px, &layout.py, &layout.pz, &layout.nx, &layout.ny, &layout.nz}) b->reset(n);
   for (AlignedBuffer<float>& w : layout.weight) w.reset(n);
+  if (muscles) {
+    for (auto& b : layout.muscle_point) b.reset(n);
+    for (auto& b : layout.muscle_coefficient) b.reset(n);
+    layout.muscle_slot.assign(n, SkinLayout::kNoMuscle);
+  }
   std::vector<std::uint32_t> rank(n);
   for (std::uint32_t i = 0; i < n; ++i) {
     const std::uint32_t v = layout.original[i];
     rank[v] = i;
     const Influence& f = inf[v];
-    if (layout.groups.empty() || layout.groups.back().joints != f.joints || layout.groups.back().influences != f.count)
-      layout.groups.push_back({f.joints, f.count, i, 0});
+    if (layout.groups.empty() || layout.groups.back().joints != f.joints || layout.groups.back().influences != f.count ||
+        layout.groups.back().muscle != bound(v))
+      layout.groups.push_back({f.joints, f.count, bound(v), i, 0});
+    if (bound(v)) {
+      layout.muscle_slot[i] = slot[v];
+      for (int k = 0; k < kMusclePointsPerVertex; ++k) {
+        layout.muscle_point[k][i] = static_cast<std::int32_t>(muscles->point[slot[v]][k]);
+        layout.muscle_points = std::max(layout.muscle_points, muscles->point[slot[v]][k] + 1);
+      }
+    }
     ++layout.groups.back().count;
     layout.px[i] = mesh.positions[v].x;
     layout.py[i] = mesh.positions[v].y;
@@ -73,6 +93,15 @@ SkinLayout make_skin_layout(const BodyLevel& level) {
   layout.triangles.resize(mesh.triangles.size());
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) layout.triangles[t] = rank[mesh.triangles[t]];
   return layout;
+}
+
+void set_muscle_coefficients(SkinLayout& layout, std::span<const std::array<float, kMusclePointsPerVertex>> c) {
+  for (std::size_t i = 0; i < layout.muscle_slot.size(); ++i) {
+    const std::uint32_t b = layout.muscle_slot[i];
+    if (b == SkinLayout::kNoMuscle) continue;
+    if (b >= c.size()) throw std::invalid_argument("set_muscle_coefficients: fewer coefficients than bound vertices");
+    for (int k = 0; k < kMusclePointsPerVertex; ++k) layout.muscle_coefficient[k][i] = c[b][k];
+  }
 }
 
 }  // namespace strata

@@ -6,9 +6,11 @@
 // so the layout carries the triangle list renumbered to that order.
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "components/body.h"
+#include "components/muscle.h"
 #include "ecs/aligned_buffer.h"
 
 namespace strata {
@@ -16,6 +18,7 @@ namespace strata {
 struct SkinGroup {
   std::array<std::int16_t, kMaxInfluences> joints{};  // the group's influence set
   std::uint32_t influences = 0;                       // 1..4 joints used
+  bool muscle = false;                                // its vertices are bound to the muscle layer
   std::uint32_t first = 0, count = 0;                 // vertex range in layout order
 };
 
@@ -27,9 +30,23 @@ struct SkinLayout {
   std::array<AlignedBuffer<float>, kMaxInfluences> weight;  // weight[k][v] belongs to groups[g].joints[k]
   std::vector<std::uint32_t> original;                      // layout vertex -> mesh vertex
   std::vector<std::uint32_t> triangles;                     // the mesh's triangles in layout numbering
+  // Muscle layer, for vertices of muscle groups (zero elsewhere): the three control points (set-wide index) and
+  // their coefficients (rig/muscle_binding.h muscle_coefficients); displacement = scale * sum_i c_i f[point_i].
+  std::array<AlignedBuffer<std::int32_t>, kMusclePointsPerVertex> muscle_point;
+  std::array<AlignedBuffer<float>, kMusclePointsPerVertex> muscle_coefficient;
+  std::vector<std::uint32_t> muscle_slot;  // layout vertex -> index in the MuscleBinding, or kNoMuscle
+  std::uint32_t muscle_points = 0;         // 1 + the largest control point index used (0: none)
+  static constexpr std::uint32_t kNoMuscle = 0xffffffffu;
+  bool has_muscles() const { return !muscle_slot.empty(); }
 };
 
-// Groups by influence set (weights renormalised to sum 1; zero-weight slots dropped). Deterministic.
-SkinLayout make_skin_layout(const BodyLevel& level);
+// Groups by influence set (weights renormalised to sum 1; zero-weight slots dropped), and, when `muscles` is
+// given, by whether a vertex is bound to the muscle layer, so the kernel pays for the displacement only where
+// there is one. Deterministic. Coefficients start at zero: set them with set_muscle_coefficients.
+SkinLayout make_skin_layout(const BodyLevel& level, const MuscleBinding* muscles = nullptr);
+
+// Installs per-binding coefficients (muscle_coefficients(), one per bound vertex of the binding the layout was
+// made with). Called at start-up and whenever a force value is edited.
+void set_muscle_coefficients(SkinLayout& layout, std::span<const std::array<float, kMusclePointsPerVertex>> c);
 
 }  // namespace strata

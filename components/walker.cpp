@@ -1,11 +1,15 @@
 #include "components/walker.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace strata {
 
-std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count) {
+std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count,
+                                            std::uint32_t muscle_points) {
   if (joint_count == 0) throw std::invalid_argument("make_walker_table: a rig needs at least one joint");
+  if (muscle_points == 1) throw std::invalid_argument("make_walker_table: an action line has at least 2 points");
+  const std::uint32_t p = std::max<std::uint32_t>(muscle_points, 1);
   std::vector<FieldDesc> fields(kWalkerFieldCount);
   fields[kWalkerPlacement] = {"placement", ScalarType::F32, 5, 0.0f};
   fields[kWalkerClock] = {"clock", ScalarType::F32, 3, 0.0f};
@@ -17,6 +21,10 @@ std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t join
   fields[kWalkerIkResult] = {"ik_result", ScalarType::F32, kIkLimbs * kIkResultFloats, 0.0f};
   fields[kWalkerGait] = {"gait", ScalarType::F32, kGaitFloats, 0.0f};
   fields[kWalkerFootLock] = {"foot_lock", ScalarType::F32, 2 * kLockFloats, -1.0f};
+  fields[kWalkerMusclePoint] = {"muscle_point", ScalarType::F32, p * 3, 0.0f};
+  fields[kWalkerMuscleFrame] = {"muscle_frame", ScalarType::F32, p * 6, 0.0f};
+  fields[kWalkerMuscleLength] = {"muscle_length", ScalarType::F32, p, 0.0f};
+  fields[kWalkerMuscleForce] = {"muscle_force", ScalarType::F32, p, 0.0f};
   return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
 }
 
@@ -28,6 +36,8 @@ WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count) {
   lanes.count = table.size();
   lanes.stride = table.stride();
   lanes.joints = joint_count;
+  const std::uint32_t points = table.fields()[kWalkerMuscleForce].width;
+  lanes.muscle_points = points >= 2 ? points : 0;
   if (lanes.count == 0) return lanes;
   lanes.placement = table.f32_base(kWalkerPlacement);
   lanes.clock = table.f32_base(kWalkerClock);
@@ -39,6 +49,10 @@ WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count) {
   lanes.ik_result = table.f32_base(kWalkerIkResult);
   lanes.gait = table.f32_base(kWalkerGait);
   lanes.foot_lock = table.f32_base(kWalkerFootLock);
+  lanes.muscle_point = table.f32_base(kWalkerMusclePoint);
+  lanes.muscle_frame = table.f32_base(kWalkerMuscleFrame);
+  lanes.muscle_length = table.f32_base(kWalkerMuscleLength);
+  lanes.muscle_force = table.f32_base(kWalkerMuscleForce);
   return lanes;
 }
 

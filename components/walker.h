@@ -75,10 +75,18 @@ enum WalkerField : std::uint32_t {
   kWalkerIkResult,         // kIkLimbs*kIkResultFloats: what IK achieved
   kWalkerGait,             // kGaitFloats: locomotion state (GaitComponent, LegComponent)
   kWalkerFootLock,         // 2*kLockFloats: mocap foot locks (FootLockComponent)
+  // Muscle layer (systems/muscle.h), per action-line control point p of the rig's muscle set (P points; a rig
+  // without muscles keeps one unused column per field, as a table field cannot be empty):
+  kWalkerMusclePoint,      // P*3: control point position, humanoid space
+  kWalkerMuscleFrame,      // P*6: local frame axes y (outward) then z (along the line); x = y cross z
+  kWalkerMuscleLength,     // P: the point's length l (mean of its adjacent segments)
+  kWalkerMuscleForce,      // P: force factor f = L / max(l, ratio L) - 1 (components/muscle.h)
   kWalkerFieldCount
 };
 
-std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count);
+// `muscle_points`: control points of the rig's muscle set (0, or >= 2 since a line has at least two).
+std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count,
+                                            std::uint32_t muscle_points = 0);
 
 // Raw pointers into a walker table for kernels: component c of a field starts at base + c * stride.
 // Valid until the table grows or shrinks; systems build one per frame.
@@ -96,6 +104,11 @@ struct WalkerLanes {
   float* ik_result = nullptr;
   float* gait = nullptr;
   float* foot_lock = nullptr;
+  std::uint32_t muscle_points = 0;  // 0 when the table was made without muscles
+  float* muscle_point = nullptr;
+  float* muscle_frame = nullptr;
+  float* muscle_length = nullptr;
+  float* muscle_force = nullptr;
 
   float* at(float* base, std::size_t component) const { return base + component * stride; }
 };

@@ -9,6 +9,8 @@
 #include "systems/animation_sample.h"
 #include "systems/fk.h"
 #include "systems/ik.h"
+#include "systems/muscle.h"
+#include "rig/muscle_binding.h"
 
 namespace strata {
 namespace {
@@ -23,7 +25,12 @@ CrowdScene::CrowdScene(Rig rig) {
   const auto joints = static_cast<std::uint32_t>(rig.skeleton.joint_count());
   std::string name = rig.name.empty() ? std::string("walkers") : rig.name;
   rig_id_ = rigs_.add(std::move(rig));
-  table_ = world_.add_table(make_walker_table(name, joints));
+  const Rig& r = this->rig();
+  const std::uint32_t muscle_points = r.muscles ? r.muscles->set.point_count : 0;
+  if (r.muscles && (!r.body || r.muscles->levels.size() != r.body->levels.size()))
+    throw std::invalid_argument("CrowdScene: the muscle layer is bound to " + std::to_string(r.muscles->levels.size()) +
+                                " body levels, the body has " + std::to_string(r.body ? r.body->levels.size() : 0));
+  table_ = world_.add_table(make_walker_table(name, joints, muscle_points));
   try {
     locomotion_ = std::make_unique<const LocomotionRig>(make_locomotion_rig(this->rig().skeleton));
   } catch (const std::exception& e) {
@@ -192,6 +199,10 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
     STRATA_PROFILE_SCOPE(p, "fk");
     fk_system(rig().skeleton, l);
   }
+  if (muscles_enabled()) {
+    STRATA_PROFILE_SCOPE(p, "muscle");
+    muscle_system(rig().muscles->set, l);
+  }
   const int level = body_level();
   if (level >= 0) {
     STRATA_PROFILE_SCOPE(p, "skin");
@@ -203,8 +214,32 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
 
 void CrowdScene::set_body_level(int level) {
   body_level_ = level;
+  rebuild_layout();
+}
+
+void CrowdScene::set_muscles_enabled(bool on) {
+  muscles_on_ = on;
+  rebuild_layout();
+}
+
+void CrowdScene::set_muscle_gains(MuscleGains gains) {
+  gains_ = std::move(gains);
   const int used = body_level();
-  layout_ = used >= 0 ? make_skin_layout(rig().body->levels[static_cast<std::size_t>(used)]) : SkinLayout{};
+  if (used >= 0 && muscles_enabled())
+    set_muscle_coefficients(layout_, muscle_coefficients(rig().muscles->set,
+                                                         rig().muscles->levels[static_cast<std::size_t>(used)], gains_));
+}
+
+void CrowdScene::rebuild_layout() {
+  const int used = body_level();
+  if (used < 0) {
+    layout_ = SkinLayout{};
+    return;
+  }
+  const auto index = static_cast<std::size_t>(used);
+  const MuscleBinding* muscles = muscles_enabled() ? &rig().muscles->levels[index] : nullptr;
+  layout_ = make_skin_layout(rig().body->levels[index], muscles);
+  if (muscles) set_muscle_coefficients(layout_, muscle_coefficients(rig().muscles->set, *muscles, gains_));
 }
 
 int CrowdScene::body_level() const {

@@ -9,9 +9,10 @@
 //   mocap: 1. mocap_drive retargeted capture -> rotations, root motion, foot-lock goals (systems/mocap_drive.h)
 //          2. ik          goals -> locked feet
 //   then   3. fk          local rotations -> world matrices F(j), skinning F(j)A(j)^-1 (systems/fk.h)
-//          4. skin        rig body level -> deformed world-space vertices, when the rig has a body (systems/skin.h)
-//
-// Later issues insert muscle between FK and skin.
+//          4. muscle      skinning matrices -> action-line control points, force factors, when the rig has
+//                         a muscle layer and it is on (systems/muscle.h)
+//          5. skin        rig body level (+ muscle displacement) -> deformed world-space vertices, when the rig
+//                         has a body (systems/skin.h)
 #include <cstdint>
 #include <vector>
 
@@ -86,6 +87,15 @@ class CrowdScene {
   int body_level() const;
   // The vertex grouping of the current level; skinned() is in its order (its triangles renumbered to match).
   const SkinLayout& skin_layout() const { return layout_; }
+  // Muscle layer: on by default when the rig has one. Off skips the muscle system and skins without
+  // displacement (the layout is rebuilt without muscle groups). Gains scale every muscle's forces at run time
+  // (the paper's users edited force values); only vertices bound to a changed muscle move.
+  bool has_muscles() const { return rig().muscles != nullptr && rig().muscles->set.point_count > 0; }
+  void set_muscles_enabled(bool on);
+  bool muscles_enabled() const { return muscles_on_ && has_muscles(); }
+  void set_muscle_gains(MuscleGains gains);
+  const MuscleGains& muscle_gains() const { return gains_; }
+
   // Deformed bodies of the last simulate(), empty when the rig has no body or skinning is off.
   const SkinnedCrowd& skinned() const { return skinned_; }
 
@@ -110,6 +120,7 @@ class CrowdScene {
   void spawn_grid(const CrowdConfig& config);
   void spawn_track(const CrowdConfig& config);
   void spawn_mocap(const CrowdConfig& config);
+  void rebuild_layout();
 
   RigLibrary rigs_;
   RigId rig_id_ = 0;
@@ -123,6 +134,8 @@ class CrowdScene {
   std::unique_ptr<const RetargetResult> mocap_;  // owns the clip and contacts mocap_rig_ points at
   std::unique_ptr<const MocapRig> mocap_rig_;
   int body_level_ = 0;
+  bool muscles_on_ = true;
+  MuscleGains gains_;
   SkinLayout layout_;
   SkinnedCrowd skinned_;
 };

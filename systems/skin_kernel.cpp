@@ -8,13 +8,23 @@ namespace {
 
 constexpr std::size_t kMaxJointsPerRig = 512;
 
+// The walker's force factors times its scale, per control point (see MuscleSet::point_count's cap).
+struct MuscleInput {
+  const float* force = nullptr;
+};
+
 // One group's vertices [first, first + count) with `k` influences whose (placement-premultiplied) 3x4 matrices
 // are m[j][0..11]. Writes SoA results. Kept a plain loop over restrict pointers with no branches, so GCC
 // vectorises it (see fk.cpp for why the normal's guard is an add rather than a compare).
-template <int K>
-void skin_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count, const float (*m)[12], float* __restrict ox,
-                float* __restrict oy, float* __restrict oz, float* __restrict onx, float* __restrict ony,
-                float* __restrict onz) {
+//
+// Muscle groups (Muscle = true) then move each vertex along its skinned, renormalised normal by
+// d = c0 f[p0] + c1 f[p1] + c2 f[p2] (three gathers from the walker's few hundred bytes of force factors, which
+// stay in L1), fused here so positions are written once; a separate displacement pass would read and write the
+// whole output again.
+template <int K, bool Muscle>
+void skin_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count, const float (*m)[12],
+                const float* __restrict force, float* __restrict ox, float* __restrict oy, float* __restrict oz,
+                float* __restrict onx, float* __restrict ony, float* __restrict onz) {
   const float* __restrict px = L.px.data() + first;
   const float* __restrict py = L.py.data() + first;
   const float* __restrict pz = L.pz.data() + first;
@@ -25,6 +35,12 @@ void skin_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count, c
   const float* __restrict w1 = L.weight[1].data() + first;
   const float* __restrict w2 = L.weight[2].data() + first;
   const float* __restrict w3 = L.weight[3].data() + first;
+  const std::int32_t* __restrict p0 = L.muscle_point[0].data() + first;
+  const std::int32_t* __restrict p1 = L.muscle_point[1].data() + first;
+  const std::int32_t* __restrict p2 = L.muscle_point[2].data() + first;
+  const float* __restrict c0 = L.muscle_coefficient[0].data() + first;
+  const float* __restrict c1 = L.muscle_coefficient[1].data() + first;
+  const float* __restrict c2 = L.muscle_coefficient[2].data() + first;
   // A local copy: the compiler cannot prove the outputs never alias `m`, and would reload it every vertex.
   float M[K][12];
   for (int k = 0; k < K; ++k)
@@ -50,34 +66,55 @@ void skin_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count, c
     };
     const float b0 = blend(0), b1 = blend(1), b2 = blend(2), b3 = blend(3), b4 = blend(4), b5 = blend(5);
     const float b6 = blend(6), b7 = blend(7), b8 = blend(8), b9 = blend(9), b10 = blend(10), b11 = blend(11);
-    const float x = px[i], y = py[i], z = pz[i];
-    ox[i] = b0 * x + b3 * y + b6 * z + b9;
-    oy[i] = b1 * x + b4 * y + b7 * z + b10;
-    oz[i] = b2 * x + b5 * y + b8 * z + b11;
     const float a = nx[i], c = ny[i], d = nz[i];
     const float qx = b0 * a + b3 * c + b6 * d;
     const float qy = b1 * a + b4 * c + b7 * d;
     const float qz = b2 * a + b5 * c + b8 * d;
     const float inv = 1.0f / std::sqrt(qx * qx + qy * qy + qz * qz + 1e-30f);
-    onx[i] = qx * inv;
-    ony[i] = qy * inv;
-    onz[i] = qz * inv;
+    const float ux = qx * inv, uy = qy * inv, uz = qz * inv;
+    onx[i] = ux;
+    ony[i] = uy;
+    onz[i] = uz;
+    const float x = px[i], y = py[i], z = pz[i];
+    float sx = b0 * x + b3 * y + b6 * z + b9;
+    float sy = b1 * x + b4 * y + b7 * z + b10;
+    float sz = b2 * x + b5 * y + b8 * z + b11;
+    if constexpr (Muscle) {
+      const float disp = c0[i] * force[p0[i]] + c1[i] * force[p1[i]] + c2[i] * force[p2[i]];
+      sx += disp * ux;
+      sy += disp * uy;
+      sz += disp * uz;
+    }
+    ox[i] = sx;
+    oy[i] = sy;
+    oz[i] = sz;
   }
 }
 
+template <bool Muscle>
+void dispatch(const SkinLayout& L, const SkinGroup& g, const float (*m)[12], const float* force, float* ox, float* oy,
+              float* oz, float* onx, float* ony, float* onz) {
+  switch (g.influences) {
+    case 1: skin_group<1, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz); break;
+    case 2: skin_group<2, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz); break;
+    case 3: skin_group<3, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz); break;
+    default: skin_group<4, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz); break;
+  }
+}
+
+// `force` null: no muscle displacement (a walker table without muscle columns, or muscles switched off).
 __attribute__((target_clones("avx2,fma", "default"))) void skin_all_groups(const SkinLayout& L, const float (*world)[12],
-                                                                            float* ox, float* oy, float* oz, float* onx,
-                                                                            float* ony, float* onz) {
+                                                                            const float* force, float* ox, float* oy,
+                                                                            float* oz, float* onx, float* ony,
+                                                                            float* onz) {
   float m[kMaxInfluences][12];
   for (const SkinGroup& g : L.groups) {
     for (std::uint32_t k = 0; k < g.influences; ++k)
       for (int c = 0; c < 12; ++c) m[k][c] = world[g.joints[k]][c];
-    switch (g.influences) {
-      case 1: skin_group<1>(L, g.first, g.count, m, ox, oy, oz, onx, ony, onz); break;
-      case 2: skin_group<2>(L, g.first, g.count, m, ox, oy, oz, onx, ony, onz); break;
-      case 3: skin_group<3>(L, g.first, g.count, m, ox, oy, oz, onx, ony, onz); break;
-      default: skin_group<4>(L, g.first, g.count, m, ox, oy, oz, onx, ony, onz); break;
-    }
+    if (g.muscle && force)
+      dispatch<true>(L, g, m, force, ox, oy, oz, onx, ony, onz);
+    else
+      dispatch<false>(L, g, m, force, ox, oy, oz, onx, ony, onz);
   }
 }
 
@@ -99,7 +136,15 @@ void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t
       world[j][col * 3 + 2] = r.z;
     }
   }
-  skin_all_groups(layout, world, out.px, out.py, out.pz, out.nx, out.ny, out.nz);
+  // Force factors times the walker's scale: the displacement is in humanoid metres, the output in world metres.
+  float force[kMaxMusclePoints];
+  const bool muscles = layout.muscle_points > 0 && lanes.muscle_points > 0;
+  if (muscles) {
+    if (layout.muscle_points > lanes.muscle_points || lanes.muscle_points > kMaxMusclePoints)
+      throw std::invalid_argument("skin_walker: the layout's muscle binding does not fit the walker table");
+    for (std::size_t p = 0; p < lanes.muscle_points; ++p) force[p] = P.scale * lanes.at(lanes.muscle_force, p)[w];
+  }
+  skin_all_groups(layout, world, muscles ? force : nullptr, out.px, out.py, out.pz, out.nx, out.ny, out.nz);
 }
 
 }  // namespace strata

@@ -26,8 +26,10 @@ inline SkinOutput skin_output_in(float* block, std::size_t stride) {
   return {block, block + stride, block + 2 * stride, block + 3 * stride, block + 4 * stride, block + 5 * stride};
 }
 
-// Skins walker `w` of `lanes` (its skinning matrices and placement) into world space, layout order. A blended
-// normal of zero length comes out as zero (not NaN); the reference falls back to the rest normal there.
+// Skins walker `w` of `lanes` (its skinning matrices and placement) into world space, layout order. When the
+// layout carries a muscle binding and the lanes muscle columns, bound vertices then move along their skinned
+// normal by the muscle displacement (scale * sum_i c_i f[p_i], systems/muscle.h). A blended normal of zero length
+// comes out as zero (not NaN; the vertex then gets no displacement); the reference falls back to the rest normal.
 void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, const SkinOutput& out);
 
 }  // namespace strata

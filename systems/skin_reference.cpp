@@ -64,6 +64,46 @@ SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std
   return out;
 }
 
+std::vector<float> walker_muscle_forces(const WalkerLanes& lanes, std::size_t walker) {
+  if (walker >= lanes.count) throw std::invalid_argument("walker_muscle_forces: walker out of range");
+  std::vector<float> f(lanes.muscle_points);
+  for (std::size_t p = 0; p < f.size(); ++p) f[p] = lanes.at(lanes.muscle_force, p)[walker];
+  return f;
+}
+
+std::vector<double> muscle_displacement_reference(std::size_t vertex_count, const MuscleReference& m) {
+  std::vector<double> d(vertex_count, 0.0);
+  if (!m.set || !m.binding) return d;
+  const MuscleSet& set = *m.set;
+  const MuscleBinding& b = *m.binding;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    if (b.vertex[i] >= vertex_count) throw std::invalid_argument("muscle_displacement_reference: vertex out of range");
+    const ActionLine& line = set.lines.at(b.line[i]);
+    double sum = 0.0;
+    for (int s = 0; s < kMusclePointsPerVertex; ++s) {
+      const std::uint32_t p = b.point[i][s];
+      if (p < line.first_point || p >= line.first_point + line.point_count || p >= m.force.size())
+        throw std::invalid_argument("muscle_displacement_reference: control point outside its line");
+      const std::vector<ForceVector>& vectors = line.forces[p - line.first_point];
+      double field = 0.0;
+      for (std::size_t a = 0; a < vectors.size(); ++a)
+        field += double(b.share[b.share_first[i][s] + a]) * double(vectors[a].magnitude);
+      sum += double(b.weight[i][s]) * field * double(m.force[p]);
+    }
+    d[b.vertex[i]] = double(b.falloff[i]) * double(m.gains.of(b.line[i])) * sum;
+  }
+  return d;
+}
+
+SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std::span<const glm::mat4> skinning,
+                               const MuscleReference& muscles) {
+  SkinnedVertices out = skin_reference(rest, binding, skinning);
+  const std::vector<double> d = muscle_displacement_reference(rest.vertex_count(), muscles);
+  for (std::size_t v = 0; v < d.size(); ++v)
+    out.positions[v] = glm::vec3(glm::dvec3(out.positions[v]) + d[v] * glm::dvec3(out.normals[v]));
+  return out;
+}
+
 SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, const WalkerLanes& lanes,
                                std::size_t walker) {
   const std::vector<glm::mat4> matrices = walker_skinning_matrices(lanes, walker);

@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 
 #include "components/mesh.h"
+#include "components/muscle.h"
 #include "components/walker.h"
 
 namespace strata {
@@ -29,6 +30,22 @@ SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std
 // The same with the skinning matrices of walker `walker` read from its lanes (3x4 column-major, walker.h).
 SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, const WalkerLanes& lanes,
                                std::size_t walker);
+// Muscle displacement for the reference: d_v = sum_i falloff * w_i * sum_a share_a * magnitude_a * gain * f[p_i],
+// evaluated in double straight from the binding (not from the kernel's folded coefficients), added along the
+// skinned normal. `force` holds one walker's force factors (systems/muscle.h), humanoid units.
+struct MuscleReference {
+  const MuscleSet* set = nullptr;
+  const MuscleBinding* binding = nullptr;
+  MuscleGains gains;
+  std::span<const float> force;
+};
+SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std::span<const glm::mat4> skinning,
+                               const MuscleReference& muscles);
+// The muscle displacement of every mesh vertex (0 for unbound ones), humanoid metres.
+std::vector<double> muscle_displacement_reference(std::size_t vertex_count, const MuscleReference& muscles);
+// The force factors of walker `walker` from its lanes.
+std::vector<float> walker_muscle_forces(const WalkerLanes& lanes, std::size_t walker);
+
 // The skinning matrices of one walker as glm matrices (fourth row 0 0 0 1).
 std::vector<glm::mat4> walker_skinning_matrices(const WalkerLanes& lanes, std::size_t walker);
 

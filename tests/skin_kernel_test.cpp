@@ -12,8 +12,10 @@
 #include "components/skin_layout.h"
 #include "io/hanim_loader.h"
 #include "rig/body_rig.h"
+#include "rig/muscle_binding.h"
 #include "systems/fk.h"
 #include "systems/frame_script.h"
+#include "systems/muscle.h"
 #include "systems/skin.h"
 #include "systems/skin_kernel.h"
 #include "systems/skin_reference.h"
@@ -46,10 +48,12 @@ TEST(SkinLayout, GroupsCoverEveryVertexOnceAndTrianglesFollowTheRenumbering) {
   }
 }
 
-// Kernel vs reference over walking frames and random joint rotations, every level.
+// Kernel vs reference (equation 4 plus the muscle displacement, evaluated from the binding in double) over
+// walking frames and random joint rotations, every level.
 TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
   Rig rig = to_rig(load_default_humanoid());
   rig.body = default_bound_body();
+  rig.muscles = default_muscle_rig();
   std::mt19937_64 rng(11);
   std::normal_distribution<float> gauss(0.0f, 0.35f);
   for (int level = 0; level < 3; ++level) {
@@ -76,10 +80,15 @@ TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
           for (int c = 0; c < 4; ++c) lanes.local_rotation[(j * 4 + c) * lanes.stride + 1] = xyzw[c];
         }
         fk_system(rig.skeleton, lanes);
+        muscle_system(rig.muscles->set, lanes);
       }
       for (std::size_t w = 0; w < lanes.count; ++w) {
         skin_walker(layout, lanes, w, soa);
-        const SkinnedVertices ref = skin_reference(body.mesh, body.binding, lanes, w);
+        const std::vector<float> force = walker_muscle_forces(lanes, w);
+        const MuscleReference muscles{&rig.muscles->set, &rig.muscles->levels[static_cast<std::size_t>(level)],
+                                      scene.muscle_gains(), force};
+        const SkinnedVertices ref =
+            skin_reference(body.mesh, body.binding, walker_skinning_matrices(lanes, w), muscles);
         const Placement P = placement_of(lanes, w);
         for (std::size_t i = 0; i < layout.vertex_count; ++i) {
           const std::uint32_t v = layout.original[i];
@@ -98,6 +107,7 @@ TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
 TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
   Rig rig = to_rig(load_default_humanoid());
   rig.body = default_bound_body();
+  rig.muscles = default_muscle_rig();
   std::vector<float> result[2];
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
