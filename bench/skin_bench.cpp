@@ -11,6 +11,7 @@
 #include "components/skin_layout.h"
 #include "io/hanim_loader.h"
 #include "rig/body_rig.h"
+#include "rig/muscle_binding.h"
 #include "systems/frame_script.h"
 #include "systems/skin_kernel.h"
 #include "systems/skin_reference.h"
@@ -23,9 +24,10 @@ struct Fixture {
   Rig rig;
   std::unique_ptr<CrowdScene> scene;
   std::vector<glm::mat4> matrices;  // the walker's skinning matrices, for the baseline
-  explicit Fixture(int level) {
+  explicit Fixture(int level, bool muscles = false) {
     rig = to_rig(load_default_humanoid());
     rig.body = default_bound_body();
+    if (muscles) rig.muscles = default_muscle_rig();
     scene = std::make_unique<CrowdScene>(rig);
     CrowdConfig config;
     config.walkers = 1;
@@ -50,13 +52,18 @@ void time_kernel(benchmark::State& state, const SkinLayout& layout, const Walker
   state.SetItemsProcessed(state.iterations() * static_cast<long>(layout.vertex_count));
 }
 
+// Args: level, muscles (0: linear blend skinning only; 1: with the default muscle layer's displacement, the
+// walker's force factors taken from a walking frame).
 void BM_SkinKernel(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-  Fixture f(static_cast<int>(state.range(0)));
+  Fixture f(static_cast<int>(state.range(0)), state.range(1) != 0);
   const SkinLayout& layout = f.scene->skin_layout();
   time_kernel(state, layout, f.scene->lanes());
 }
-BENCHMARK(BM_SkinKernel)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SkinKernel)
+    ->ArgsProduct({{0, 1, 2}, {0, 1}})
+    ->ArgNames({"level", "muscles"})
+    ->Unit(benchmark::kMicrosecond);
 
 // The baseline: AoS vertices with up to four (joint, weight) pairs each, blending 4x4 matrices per vertex.
 struct AosVertex {

@@ -4,6 +4,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -210,6 +211,44 @@ TEST(StrataReport, SkinWritesLevelsBindingAndQuality) {
               level.at("vertices").get<int>());
     EXPECT_LT(level.at("elbow_volume_change_pct").get<double>(), 0.0) << "linear blend skinning loses volume";
   }
+}
+
+TEST(StrataReport, MuscleWritesTheIssueKeysAndMeetsItsTargets) {
+  const fs::path json = scratch("muscle.json");
+  const fs::path images = scratch("figure");
+  Result r = run("report muscle --seconds 0.3 --json " + json.string() + " --images " + images.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_LT(j["rest_displacement_max_m"].get<double>(), 1e-6);
+  double previous = -1.0;
+  for (const char* angle : {"0", "30", "60", "90", "120"}) {
+    const double bulge = j["biceps_bulge_mm"][angle].get<double>();
+    EXPECT_GT(bulge, previous) << angle;
+    previous = bulge;
+  }
+  EXPECT_TRUE(j["relaxes_on_extension"].get<bool>());
+  EXPECT_EQ(j["nan_count"].get<int>(), 0);
+  EXPECT_EQ(j["muscles"].get<int>(), 12);
+  EXPECT_GT(j["bound_vertices"].get<int>(), 1000);
+  for (const auto& level : j["levels"]) EXPECT_LT(level["kernel_vs_reference_max_m"].get<double>(), 1e-5);
+  EXPECT_TRUE(fs::file_size(images / "muscle_figure6.png") > 1000);
+}
+
+TEST(StrataCrowd, BadMuscleFilesAreOneLineErrors) {
+  const fs::path bad = scratch("bad_muscles.json");
+  std::ofstream(bad) << R"({"format": "strata-muscles", "version": 1, "muscles": [{"name": "x", "mirror_of": "y"}]})";
+  Result r = run("crowd --walkers 1 --frames 1 --no-png --no-progress --muscles " + bad.string() + " --out " +
+                 scratch("m").string());
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find(bad.string() + ": muscles[0] (x).mirror_of: no earlier muscle 'y'"), std::string::npos) << r.out;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+  const fs::path overrides = scratch("overrides.json");
+  std::ofstream(overrides) << R"({"muscles": {"l_bicep": 2}})";
+  Result o = run("crowd --walkers 1 --frames 1 --no-png --no-progress --muscle-overrides " + overrides.string() +
+                 " --out " + scratch("o").string());
+  EXPECT_EQ(o.status, 1) << o.out;
+  EXPECT_NE(o.out.find("muscles.l_bicep: no such muscle"), std::string::npos) << o.out;
 }
 
 TEST(StrataBench, TimesTheFullSimulationWithoutRendering) {
