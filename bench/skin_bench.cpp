@@ -65,6 +65,16 @@ BENCHMARK(BM_SkinKernel)
     ->ArgNames({"level", "muscles"})
     ->Unit(benchmark::kMicrosecond);
 
+// The same kernel forced onto its portable (SSE2) body, level 0, for the SIMD width's share of the speed.
+void BM_SkinKernelPortable(benchmark::State& state) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  Fixture f(0, state.range(0) != 0);
+  force_skin_kernel_isa(SkinKernelIsa::Portable);
+  time_kernel(state, f.scene->skin_layout(), f.scene->lanes());
+  force_skin_kernel_isa(SkinKernelIsa::Auto);
+}
+BENCHMARK(BM_SkinKernelPortable)->ArgName("muscles")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
 // The baseline: AoS vertices with up to four (joint, weight) pairs each, blending 4x4 matrices per vertex.
 struct AosVertex {
   glm::vec3 position, normal;

@@ -3,9 +3,9 @@
 // vectorised. Matrices are broadcast per influence group; per vertex it blends them with the vertex's weights
 // and transforms the rest position and normal (normals through the blended 3x3, renormalised).
 //
-// Runtime dispatch: the kernel is compiled twice (GCC target_clones: AVX2 + FMA, and the baseline x86-64 SSE2)
-// and the loader picks the one the CPU runs, so one binary is fast on AVX2 machines and still correct elsewhere.
-// systems/skin_reference.h is its scalar twin; tests hold the two to 1e-5 m.
+// Runtime dispatch: the kernel is compiled twice (x86-64-v3, i.e. AVX2 + FMA, and the baseline x86-64 SSE2) and
+// picks the one the CPU runs on first use, so one binary is fast on AVX2 machines and still correct elsewhere.
+// systems/skin_reference.h is its scalar twin; tests hold both compiled bodies to it within 1e-5 m.
 #include <span>
 
 #include <glm/vec3.hpp>
@@ -25,6 +25,14 @@ struct SkinOutput {
 inline SkinOutput skin_output_in(float* block, std::size_t stride) {
   return {block, block + stride, block + 2 * stride, block + 3 * stride, block + 4 * stride, block + 5 * stride};
 }
+
+enum class SkinKernelIsa { Auto, Avx2Fma, Portable };
+// Pins the body skin_walker uses (tests run both; Auto = what the CPU supports). Throws std::invalid_argument
+// for Avx2Fma on a CPU without it.
+void force_skin_kernel_isa(SkinKernelIsa isa);
+// The body skin_walker runs now (never Auto), and its name ("avx2+fma", "sse2").
+SkinKernelIsa skin_kernel_isa();
+const char* skin_kernel_isa_name(SkinKernelIsa isa);
 
 // Skins walker `w` of `lanes` (its skinning matrices and placement) into world space, layout order. When the
 // layout carries a muscle binding and the lanes muscle columns, bound vertices then move along their skinned

@@ -50,7 +50,18 @@ TEST(SkinLayout, GroupsCoverEveryVertexOnceAndTrianglesFollowTheRenumbering) {
 
 // Kernel vs reference (equation 4 plus the muscle displacement, evaluated from the binding in double) over
 // walking frames and random joint rotations, every level.
-TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
+// Both compiled bodies (AVX2 + FMA where the CPU has it, and the portable SSE2 one) are held to the twin.
+class SkinKernelIsaTest : public ::testing::TestWithParam<SkinKernelIsa> {
+ protected:
+  void SetUp() override {
+    if (GetParam() == SkinKernelIsa::Avx2Fma && !__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 here";
+    force_skin_kernel_isa(GetParam());
+  }
+  void TearDown() override { force_skin_kernel_isa(SkinKernelIsa::Auto); }
+};
+
+TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
+  ASSERT_EQ(skin_kernel_isa(), GetParam());
   Rig rig = to_rig(load_default_humanoid());
   rig.body = default_bound_body();
   rig.muscles = default_muscle_rig();
@@ -103,6 +114,10 @@ TEST(SkinKernel, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
     EXPECT_LT(worst_n, 1e-4f) << "level " << level;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(BothBodies, SkinKernelIsaTest,
+                         ::testing::Values(SkinKernelIsa::Avx2Fma, SkinKernelIsa::Portable),
+                         [](const auto& info) { return std::string(info.param == SkinKernelIsa::Avx2Fma ? "Avx2Fma" : "Portable"); });
 
 TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
   Rig rig = to_rig(load_default_humanoid());
