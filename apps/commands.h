@@ -14,5 +14,6 @@ void add_view_command(CLI::App& app, int& exit_code);
 void add_report_command(CLI::App& app, int& exit_code);
 void add_bench_command(CLI::App& app, int& exit_code);
 void add_skin_report(CLI::App& report, int& exit_code);  // `strata report skin`, apps/report_skin.cpp
+void add_subdiv_report(CLI::App& report, int& exit_code);  // `strata report subdiv`, apps/report_subdiv.cpp
 
 }  // namespace strata::cli

@@ -23,7 +23,7 @@ struct SceneOptions {
   std::uint64_t seed = 1;
   float spacing = 1.25f;
   int threads = 0;       // 0 = all cores
-  int level = 0;         // body resolution level drawn (0 finest .. 2); -1 = no body, skeletons only
+  int level = 0;         // body resolution level drawn (0 finest .. 2, subdiv_level(1..3) = S1..S3); -1 = no body
 };
 
 // Registers --walkers, --skeleton, --clip, --rest, --seed, --spacing and --threads on `cmd`.

@@ -193,7 +193,10 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
     fk_system(rig().skeleton, l);
   }
   const int level = body_level();
-  if (level >= 0) {
+  if (subdiv_) {
+    STRATA_PROFILE_SCOPE(p, "subdiv");  // cage skinning + refinement + normals
+    subdiv_system(*subdiv_, l, skinned_);
+  } else if (level >= 0) {
     STRATA_PROFILE_SCOPE(p, "skin");
     skin_system(layout_, l, skinned_);
   } else {
@@ -204,12 +207,14 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
 void CrowdScene::set_body_level(int level) {
   body_level_ = level;
   const int used = body_level();
-  layout_ = used >= 0 ? make_skin_layout(rig().body->levels[static_cast<std::size_t>(used)]) : SkinLayout{};
+  subdiv_ = is_subdiv_level(used) ? body_subdiv_surface(*rig().body, subdiv_depth(used)) : nullptr;
+  layout_ = used >= 0 && !subdiv_ ? make_skin_layout(rig().body->levels[static_cast<std::size_t>(used)]) : SkinLayout{};
 }
 
 int CrowdScene::body_level() const {
   const Body* body = rig().body.get();
   if (!body || body->levels.empty() || body_level_ < 0) return -1;
+  if (is_subdiv_level(body_level_)) return body->cage ? body_level_ : 0;
   return std::min(body_level_, static_cast<int>(body->levels.size()) - 1);
 }
 

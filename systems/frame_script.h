@@ -10,6 +10,7 @@
 //          2. ik          goals -> locked feet
 //   then   3. fk          local rotations -> world matrices F(j), skinning F(j)A(j)^-1 (systems/fk.h)
 //          4. skin        rig body level -> deformed world-space vertices, when the rig has a body (systems/skin.h)
+//             or subdiv   at levels S1..S3: skin the cage, refine it (systems/subdiv.h)
 //
 // Later issues insert muscle between FK and skin.
 #include <cstdint>
@@ -29,6 +30,7 @@
 #include "systems/locomotion.h"
 #include "systems/mocap_drive.h"
 #include "systems/skin.h"
+#include "systems/subdiv.h"
 
 namespace strata {
 
@@ -81,11 +83,18 @@ class CrowdScene {
   void set_motion(MotionSource motion) { motion_ = motion; }
   GaitStyle& style() { return style_; }
 
-  // Body level the skin system deforms (clamped to the rig's levels); -1 turns skinning off.
+  // Body level the skin system deforms (clamped to the rig's levels); -1 turns skinning off; S1..S3
+  // (subdiv_level(1..3), components/body.h) draw the cage refined 1..3 times, and fall back to level 0 when the
+  // rig's body has no cage. Switching at run time is cheap: a subdivided surface is built once per rig.
   void set_body_level(int level);
   int body_level() const;
-  // The vertex grouping of the current level; skinned() is in its order (its triangles renumbered to match).
+  // The vertex grouping of the current mesh level (empty at S levels: then the cage's is subdiv()->cage_layout);
+  // skinned() is in its order (its triangles renumbered to match).
   const SkinLayout& skin_layout() const { return layout_; }
+  // The refined cage drawn at S levels, else null.
+  const SubdivSurface* subdiv() const { return subdiv_.get(); }
+  // The triangles to draw skinned() with: the level's (layout numbering) or the refined cage's.
+  const std::vector<std::uint32_t>& body_triangles() const { return subdiv_ ? subdiv_->triangles : layout_.triangles; }
   // Deformed bodies of the last simulate(), empty when the rig has no body or skinning is off.
   const SkinnedCrowd& skinned() const { return skinned_; }
 
@@ -124,6 +133,7 @@ class CrowdScene {
   std::unique_ptr<const MocapRig> mocap_rig_;
   int body_level_ = 0;
   SkinLayout layout_;
+  std::shared_ptr<const SubdivSurface> subdiv_;  // set at S levels (owned by the rig's Body; shared)
   SkinnedCrowd skinned_;
 };
 
