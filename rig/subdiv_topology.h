@@ -5,10 +5,10 @@
 // Refinement is linear in the cage: every refined vertex is a fixed weighted sum of cage vertices. OpenSubdiv
 // computes the weights once (a Far::TopologyRefiner refined uniformly); each frame only the sums remain. They are
 // stored LEVEL BY LEVEL: steps[k] makes level k + 1 from level k. The alternative, OpenSubdiv's factorised
-// stencil table (every level-L vertex directly from the cage), needs far more terms per vertex as L grows
-// (measured on the default cage: mean 6.6 at level 1, 13.9 at 2, 28.2 at 3 against 6.2 for level by level at any
-// depth, since three quarters of each new level are 4-term edge points), so the per-frame sums cost 2-4x more at
-// levels 2-3. `strata report subdiv` times both forms and Far::StencilTable::UpdateValues.
+// stencil table (every level-L vertex directly from the cage), needs more terms per refined vertex as L grows
+// (default cage: 4.7 / 8.2 / 10.3 at levels 1 / 2 / 3, against 4.7 / 5.9 / 6.2 counting every level's rows level
+// by level, since three quarters of each new level are 4-term edge points), and measured ~1.5x slower per frame
+// at levels 2-3. `strata report subdiv` times both forms and Far::StencilTable::UpdateValues side by side.
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -41,7 +41,8 @@ struct SubdivSurface {
   int depth = 0;                       // refinement level L (1..3)
   SkinLayout cage_layout;              // the bound cage grouped for the skinning kernel
   std::vector<SubdivStencils> steps;   // steps.front() reads the cage in cage_layout order
-  std::uint32_t vertex_count = 0;      // refined vertices, in OpenSubdiv's level-L order
+  std::uint32_t vertex_count = 0;      // refined vertices, numbered in the order the triangles first use them
+  std::vector<std::uint32_t> opensubdiv_vertex;  // refined vertex -> its index in OpenSubdiv's level-L numbering
   std::vector<std::uint32_t> triangles;  // refined triangles, counter-clockwise from outside like the cage's
   // Face-varying UVs refined once (UVs do not deform); empty when the cage has none. uv_triangles holds 3 indices
   // per triangle into uvs, parallel to `triangles` (a seam gives one vertex several UV values).

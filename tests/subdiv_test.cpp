@@ -117,11 +117,22 @@ TEST(Subdiv, RestCageMatchesOpenSubdivRefinement) {
     ASSERT_EQ(out.vertex_count, level.size());
     ASSERT_EQ(factorised.size(), level.size());
     float worst = 0.0f, worst_factorised = 0.0f;
+    const std::vector<std::uint32_t>& osd = scene->subdiv()->opensubdiv_vertex;
+    ASSERT_EQ(osd.size(), level.size());
     for (std::size_t i = 0; i < level.size(); ++i) {
       const glm::vec3 p = out.position(0, i);
-      worst = std::max(worst, glm::length(p - glm::vec3(level[i].x, level[i].y, level[i].z)));
-      worst_factorised = std::max(worst_factorised, glm::length(p - glm::vec3(factorised[i].x, factorised[i].y, factorised[i].z)));
+      const Point3& a = level[osd[i]];
+      const Point3& b = factorised[osd[i]];
+      worst = std::max(worst, glm::length(p - glm::vec3(a.x, a.y, a.z)));
+      worst_factorised = std::max(worst_factorised, glm::length(p - glm::vec3(b.x, b.y, b.z)));
     }
+    // The renumbered triangles are OpenSubdiv's faces, in its face order.
+    const Far::TopologyLevel& last = refiner->GetLevel(depth);
+    ASSERT_EQ(scene->subdiv()->triangles.size(), 3u * static_cast<std::size_t>(last.GetNumFaces()));
+    for (int f = 0; f < last.GetNumFaces(); ++f)
+      for (int k = 0; k < 3; ++k)
+        ASSERT_EQ(osd[scene->subdiv()->triangles[3 * static_cast<std::size_t>(f) + k]],
+                  static_cast<std::uint32_t>(last.GetFaceVertices(f)[k]));
     EXPECT_LT(worst, 1e-5f) << "S" << depth;
     EXPECT_LT(worst_factorised, 1e-5f) << "S" << depth;
 
