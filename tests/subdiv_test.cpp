@@ -2,9 +2,17 @@
 // refinement, watertightness, no NaN on extreme poses, run-time level switching, open boundaries and
 // face-varying UVs.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <random>
 #include <utility>
@@ -336,6 +344,88 @@ TEST(Subdiv, RejectsBadInput) {
   BodyLevel unbound{body->cage->mesh, {}};
   EXPECT_THROW(make_subdiv_surface(unbound, 1), std::invalid_argument);
   EXPECT_THROW(make_subdiv_surface(BodyLevel{}, 1), std::invalid_argument);
+}
+
+// ---- The command line: --level S1..S3 in crowd and bench, and `strata report subdiv` ----------------------------
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status = -1;
+  std::string out;  // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = "env -u DISPLAY " + std::string(STRATA_BINARY) + " " + args + " 2>&1";
+  Result r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+fs::path scratch(const std::string& name) {
+  fs::path p = fs::temp_directory_path() / ("strata_subdiv_test_" + std::to_string(getpid())) / name;
+  fs::remove_all(p);
+  fs::create_directories(p.parent_path());
+  return p;
+}
+
+TEST(SubdivCli, CrowdAndBenchDrawTheRefinedCage) {
+  const auto body = default_bound_body();
+  const fs::path out = scratch("crowd_s2");
+  Result r = run("crowd --walkers 2 --frames 2 --width 96 --height 64 --level S2 --no-progress --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary.at("body_level_name"), "S2");
+  EXPECT_EQ(summary.at("body_vertices"), body_subdiv_surface(*body, 2)->vertex_count);
+  bool timed = false;
+  for (const auto& system : summary.at("systems")) timed |= system.at("name") == "subdiv";
+  EXPECT_TRUE(timed) << summary.at("systems").dump();
+
+  const fs::path json = scratch("bench_s1.json");
+  Result b = run("bench --walkers 3 --frames 2 --level s1 --threads 1 --json " + json.string());
+  ASSERT_EQ(b.status, 0) << b.out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(j.at("level_name"), "S1");
+  EXPECT_EQ(j.at("vertices_per_walker"), body_subdiv_surface(*body, 1)->vertex_count);
+
+  Result bad = run("bench --walkers 1 --frames 1 --level S4");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.out.find("S3"), std::string::npos) << bad.out;
+  const fs::path gltf = fs::path(STRATA_SHARED_DATA) / "gltf_khronos_samples" / "CesiumMan.glb";
+  if (fs::exists(gltf)) {
+    Result no_cage = run("bench --walkers 1 --frames 1 --level S1 --mesh " + gltf.string());
+    EXPECT_NE(no_cage.status, 0);
+    EXPECT_NE(no_cage.out.find("subdivision cage"), std::string::npos) << no_cage.out;
+  }
+}
+
+TEST(SubdivCli, ReportWritesCostsAndDeviation) {
+  const fs::path json = scratch("subdiv.json");
+  Result r = run("report subdiv --batches 1 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  ASSERT_EQ(j.at("levels").size(), 3u);
+  std::size_t previous = 0;
+  for (const auto& level : j.at("levels")) {
+    for (const char* key : {"refine_ns_per_vertex", "factorised_soa_ns_per_vertex", "far_update_values_ns_per_vertex",
+                            "normals_ns_per_vertex", "walker_us"})
+      EXPECT_GT(level.at(key).get<double>(), 0.0) << key;
+    EXPECT_LT(level.at("forms_max_difference_m").get<double>(), 1e-5) << "our stencils and Far's agree";
+    EXPECT_GT(level.at("vertices").get<std::size_t>(), 3 * previous) << "each level about 4x the last";
+    previous = level.at("vertices").get<std::size_t>();
+  }
+  EXPECT_EQ(j.at("routes").size(), 6u) << "levels 0-2 skinned directly, S1-S3 refined";
+  // The refined cage and level 0 are two tessellations of one body: close (cm), but not identical.
+  const double deviation = j.at("max_deviation_m").get<double>();
+  EXPECT_GT(deviation, 0.0);
+  EXPECT_LT(deviation, 0.05);
+  for (const auto& d : j.at("deviation")) EXPECT_LE(d.at("mean_deviation_m").get<double>(), d.at("max_deviation_m").get<double>());
 }
 
 }  // namespace
