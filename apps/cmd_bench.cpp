@@ -48,6 +48,7 @@ int run_bench(const BenchOptions& o) {
     j["frames"] = o.frames;
     j["threads"] = threads;
     j["level"] = scene->body_level();
+    j["level_name"] = body_level_name(scene->body_level());
     j["vertices_per_walker"] = vertices;
     j["frame_ms"] = frame_ms;
     j["walkers_per_second"] = static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms;
@@ -57,9 +58,9 @@ int run_bench(const BenchOptions& o) {
                          {"max_ms", s.max_ms}});
     j["systems"] = systems;
     if (!o.json.empty()) write_json_file(o.json, j);
-    std::printf("strata bench: %zu walkers x %zu frames, level %d (%zu vertices each), %d threads: %.2f ms/frame, "
+    std::printf("strata bench: %zu walkers x %zu frames, level %s (%zu vertices each), %d threads: %.2f ms/frame, "
                 "%.0f walker-frames/s\n",
-                scene->walker_count(), o.frames, scene->body_level(), vertices, threads, frame_ms,
+                scene->walker_count(), o.frames, body_level_name(scene->body_level()).c_str(), vertices, threads, frame_ms,
                 static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms);
     profiler.print_table(std::cout);
   } catch (const std::exception& e) {

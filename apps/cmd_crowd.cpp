@@ -159,6 +159,7 @@ int run_crowd(const CrowdOptions& o) {
                            {"sites", scene.rig().skeleton.sites.size()}};
     const int clip = scene.clip_of(0);
     summary["body_level"] = scene.body_level();
+    summary["body_level_name"] = body_level_name(scene.body_level());
     summary["body_vertices"] = bodies ? scene.skinned().vertex_count : 0;
     summary["clip"] = clip >= 0 ? nlohmann::json(scene.rig().clips[clip].name)
                       : clip == kAllClips ? nlohmann::json("all") : nlohmann::json(nullptr);

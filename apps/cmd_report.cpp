@@ -105,6 +105,7 @@ void add_report_command(CLI::App& app, int& exit_code) {
   gait->callback([o, &exit_code] { exit_code = run_gait_report(*o); });
   add_skin_report(*report, exit_code);
   add_muscle_report(*report, exit_code);
+  add_subdiv_report(*report, exit_code);
 }
 
 }  // namespace strata::cli

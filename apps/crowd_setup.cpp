@@ -38,9 +38,22 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   cmd.add_option("--seed", o.seed, "Seed for per-walker phase, rate and heading")->capture_default_str();
   cmd.add_option("--spacing", o.spacing, "Metres between walkers on the grid")->capture_default_str();
   cmd.add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+  // S1..S3 become their level numbers (components/body.h) before CLI11 parses the int.
+  const CLI::Validator body_level(
+      [](std::string& value) -> std::string {
+        if (value.size() == 2 && (value[0] == 'S' || value[0] == 's') && value[1] >= '1' && value[1] <= '3') {
+          value = std::to_string(subdiv_level(value[1] - '0'));
+          return {};
+        }
+        if (value == "-1" || value == "0" || value == "1" || value == "2") return {};
+        return "must be 0, 1, 2, S1, S2, S3 or -1, got '" + value + "'";
+      },
+      "0|1|2|S1|S2|S3|-1");
   cmd.add_option("--level", o.level,
-                 "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133), or -1 for skeletons only")
-      ->capture_default_str()->check(CLI::Range(-1, 2));
+                 "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133); S1, S2, S3: the 1,800-vertex "
+                 "cage skinned and Loop-subdivided 1-3 times every frame (7,194 / 28,770 / 115,074 vertices); "
+                 "-1 for skeletons only")
+      ->capture_default_str()->transform(body_level);
   cmd.add_option("--muscles", o.muscles,
                  "Muscle layer: 'default' (the shipped 12 action lines, data/muscles.json), 'none', or a muscle "
                  "file (format: io/muscle_file.h)")->capture_default_str();
@@ -151,6 +164,9 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
   }
   scene->spawn_crowd(config);
   scene->set_body_level(o.level);
+  if (is_subdiv_level(o.level) && scene->body_level() != o.level)
+    throw std::invalid_argument("--level " + body_level_name(o.level) +
+                                " needs a subdivision cage; only the shipped body has one");
   if (scene->has_muscles()) {
     MuscleGains gains = o.muscle_overrides.empty() ? MuscleGains{}
                                                    : load_muscle_overrides(o.muscle_overrides, scene->rig().muscles->set);
@@ -164,7 +180,7 @@ BodyDrawInput body_draw_input(const CrowdScene& scene) {
   BodyDrawInput input;
   if (scene.body_level() < 0) return input;
   const SkinnedCrowd& s = scene.skinned();
-  input.triangles = scene.skin_layout().triangles;
+  input.triangles = scene.body_triangles();
   input.px = s.px.data(), input.py = s.py.data(), input.pz = s.pz.data();
   input.nx = s.nx.data(), input.ny = s.ny.data(), input.nz = s.nz.data();
   input.stride = s.stride;

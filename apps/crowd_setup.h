@@ -23,7 +23,7 @@ struct SceneOptions {
   std::uint64_t seed = 1;
   float spacing = 1.25f;
   int threads = 0;       // 0 = all cores
-  int level = 0;         // body resolution level drawn (0 finest .. 2); -1 = no body, skeletons only
+  int level = 0;         // body resolution level drawn (0 finest .. 2, subdiv_level(1..3) = S1..S3); -1 = no body
   std::string muscles = "default";  // "default" (data/muscles.json), "none", or a muscle file
   float muscle_gain = 1.0f;         // scales every muscle's forces
   std::string muscle_overrides;     // per-muscle gains file (io/muscle_file.h)

@@ -19,6 +19,7 @@
 // derives c_i from the force vectors' magnitudes and the binding weights).
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -117,10 +118,11 @@ struct MuscleGains {
   float of(std::size_t m) const { return global * (m < line.size() ? line[m] : 1.0f); }
 };
 
-// The muscle layer of a rig: the set and its binding to every body level (index = body level).
+// The muscle layer of a rig: the set and its binding to every body level (index = body level) and to the cage.
 struct MuscleRig {
   MuscleSet set;
   std::vector<MuscleBinding> levels;
+  std::optional<MuscleBinding> cage;  // the body's subdivision cage, when it has one
 };
 
 }  // namespace strata

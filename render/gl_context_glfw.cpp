@@ -84,6 +84,9 @@ struct GlfwWindow::Impl {
       case GLFW_KEY_S:
         if (press) self.pending.screenshot = true;
         break;
+      case GLFW_KEY_L:
+        if (press) ++self.pending.level_steps;
+        break;
       case GLFW_KEY_ESCAPE:
       case GLFW_KEY_Q:
         if (press) {

@@ -32,6 +32,7 @@ struct WindowInput {
   bool toggle_pause = false;    // Space; an even number of presses cancels out
   int single_steps = 0;         // N presses (key repeat counts)
   bool screenshot = false;      // S
+  int level_steps = 0;          // L presses: next body level (0, 1, 2, S1, S2, S3, back to 0)
   bool quit = false;            // Esc, Q or the window's close button
   bool resized = false;         // framebuffer size changed
 };

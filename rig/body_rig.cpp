@@ -6,23 +6,27 @@
 
 namespace strata {
 
-std::shared_ptr<const Body> bind_body(std::span<const Mesh> levels, const Skeleton& skeleton, BindingMethod method) {
-  auto body = std::make_shared<Body>();
-  for (const Mesh& mesh : levels) {
+std::shared_ptr<const Body> bind_body(std::span<const Mesh> levels, const Skeleton& skeleton, BindingMethod method,
+                                      const Mesh* cage) {
+  auto bind = [&](const Mesh& mesh) {
     BodyLevel level;
     level.mesh = mesh;
     if (level.mesh.normals.size() != level.mesh.positions.size()) compute_normals(level.mesh);
     level.binding = method == BindingMethod::ThreeStep
                         ? bind_three_step(level.mesh, skeleton, default_binding_tables())
                         : bind_automatic(level.mesh, skeleton);
-    body->levels.push_back(std::move(level));
-  }
+    return level;
+  };
+  auto body = std::make_shared<Body>();
+  for (const Mesh& mesh : levels) body->levels.push_back(bind(mesh));
+  if (cage) body->cage = bind(*cage);
   return body;
 }
 
 std::shared_ptr<const Body> default_bound_body() {
   // Binding is deterministic, so one copy serves every scene of the process.
-  static const std::shared_ptr<const Body> body = bind_body(default_body().levels, load_default_humanoid().skeleton);
+  static const std::shared_ptr<const Body> body = bind_body(default_body().levels, load_default_humanoid().skeleton,
+                                                                BindingMethod::ThreeStep, &default_body().cage);
   return body;
 }
 

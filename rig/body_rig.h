@@ -11,11 +11,12 @@ namespace strata {
 enum class BindingMethod { ThreeStep, Automatic };
 
 // Binds each mesh (finest first) with the paper's three steps and the shipped tables (rig/binding.h), or with
-// the automatic bone-heat weights.
+// the automatic bone-heat weights; `cage`, when given, is bound the same way into Body::cage.
 std::shared_ptr<const Body> bind_body(std::span<const Mesh> levels, const Skeleton& skeleton,
-                                      BindingMethod method = BindingMethod::ThreeStep);
+                                      BindingMethod method = BindingMethod::ThreeStep, const Mesh* cage = nullptr);
 
-// The shipped default body (rig/body_generator.h) bound to the shipped default skeleton, built once per process.
+// The shipped default body (rig/body_generator.h), its three levels and its subdivision cage, bound to the
+// shipped default skeleton, built once per process.
 // It fits that skeleton only, so the function takes none: a caller cannot pair it with another by mistake.
 std::shared_ptr<const Body> default_bound_body();
 

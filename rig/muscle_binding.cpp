@@ -118,6 +118,7 @@ std::vector<std::array<float, kMusclePointsPerVertex>> muscle_coefficients(const
 std::shared_ptr<const MuscleRig> bind_muscle_rig(MuscleSet set, const Body& body) {
   auto rig = std::make_shared<MuscleRig>();
   for (const BodyLevel& level : body.levels) rig->levels.push_back(bind_muscles(level.mesh, set));
+  if (body.cage) rig->cage = bind_muscles(body.cage->mesh, set);
   rig->set = std::move(set);
   return rig;
 }

@@ -204,7 +204,10 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
     muscle_system(rig().muscles->set, l);
   }
   const int level = body_level();
-  if (level >= 0) {
+  if (subdiv_) {
+    STRATA_PROFILE_SCOPE(p, "subdiv");  // cage skinning + refinement + normals
+    subdiv_system(*subdiv_, l, skinned_, muscles_enabled() ? &cage_muscles_ : nullptr);
+  } else if (level >= 0) {
     STRATA_PROFILE_SCOPE(p, "skin");
     skin_system(layout_, l, skinned_);
   } else {
@@ -225,26 +228,41 @@ void CrowdScene::set_muscles_enabled(bool on) {
 void CrowdScene::set_muscle_gains(MuscleGains gains) {
   gains_ = std::move(gains);
   const int used = body_level();
-  if (used >= 0 && muscles_enabled())
-    set_muscle_coefficients(layout_, muscle_coefficients(rig().muscles->set,
-                                                         rig().muscles->levels[static_cast<std::size_t>(used)], gains_));
+  if (used >= 0 && muscles_enabled()) rebuild_muscle_coefficients();
 }
 
 void CrowdScene::rebuild_layout() {
   const int used = body_level();
-  if (used < 0) {
-    layout_ = SkinLayout{};
+  subdiv_ = is_subdiv_level(used) ? body_subdiv_surface(*rig().body, subdiv_depth(used)) : nullptr;
+  layout_ = SkinLayout{};
+  cage_muscles_ = MuscleDisplacementList{};
+  if (used < 0) return;
+  if (subdiv_) {
+    if (muscles_enabled() && rig().muscles->cage) rebuild_muscle_coefficients();
     return;
   }
   const auto index = static_cast<std::size_t>(used);
-  const MuscleBinding* muscles = muscles_enabled() ? &rig().muscles->levels[index] : nullptr;
-  layout_ = make_skin_layout(rig().body->levels[index], muscles);
-  if (muscles) set_muscle_coefficients(layout_, muscle_coefficients(rig().muscles->set, *muscles, gains_));
+  layout_ = make_skin_layout(rig().body->levels[index], muscles_enabled() ? &rig().muscles->levels[index] : nullptr);
+  if (muscles_enabled()) rebuild_muscle_coefficients();
+}
+
+void CrowdScene::rebuild_muscle_coefficients() {
+  const MuscleRig& m = *rig().muscles;
+  if (subdiv_) {
+    if (m.cage)
+      cage_muscles_ = make_muscle_displacement_list(subdiv_->cage_layout, *m.cage, muscle_coefficients(m.set, *m.cage, gains_));
+    return;
+  }
+  const int used = body_level();
+  if (used < 0 || !layout_.has_muscles()) return;
+  const MuscleBinding& binding = m.levels[static_cast<std::size_t>(used)];
+  set_muscle_coefficients(layout_, muscle_coefficients(m.set, binding, gains_));
 }
 
 int CrowdScene::body_level() const {
   const Body* body = rig().body.get();
   if (!body || body->levels.empty() || body_level_ < 0) return -1;
+  if (is_subdiv_level(body_level_)) return body->cage ? body_level_ : 0;
   return std::min(body_level_, static_cast<int>(body->levels.size()) - 1);
 }
 

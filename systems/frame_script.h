@@ -13,6 +13,7 @@
 //                         a muscle layer and it is on (systems/muscle.h)
 //          5. skin        rig body level (+ muscle displacement) -> deformed world-space vertices, when the rig
 //                         has a body (systems/skin.h)
+//             or subdiv   at levels S1..S3: skin (+ muscle-displace) the cage, refine it (systems/subdiv.h)
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +31,7 @@
 #include "systems/locomotion.h"
 #include "systems/mocap_drive.h"
 #include "systems/skin.h"
+#include "systems/subdiv.h"
 
 namespace strata {
 
@@ -82,10 +84,13 @@ class CrowdScene {
   void set_motion(MotionSource motion) { motion_ = motion; }
   GaitStyle& style() { return style_; }
 
-  // Body level the skin system deforms (clamped to the rig's levels); -1 turns skinning off.
+  // Body level the skin system deforms (clamped to the rig's levels); -1 turns skinning off; S1..S3
+  // (subdiv_level(1..3), components/body.h) draw the cage refined 1..3 times, and fall back to level 0 when the
+  // rig's body has no cage. Switching at run time is cheap: a subdivided surface is built once per rig.
   void set_body_level(int level);
   int body_level() const;
-  // The vertex grouping of the current level; skinned() is in its order (its triangles renumbered to match).
+  // The vertex grouping of the current mesh level (empty at S levels: then the cage's is subdiv()->cage_layout);
+  // skinned() is in its order (its triangles renumbered to match).
   const SkinLayout& skin_layout() const { return layout_; }
   // Muscle layer: on by default when the rig has one. Off skips the muscle system and skins without
   // displacement (the layout is rebuilt without muscle groups). Gains scale every muscle's forces at run time
@@ -96,6 +101,10 @@ class CrowdScene {
   void set_muscle_gains(MuscleGains gains);
   const MuscleGains& muscle_gains() const { return gains_; }
 
+  // The refined cage drawn at S levels, else null.
+  const SubdivSurface* subdiv() const { return subdiv_.get(); }
+  // The triangles to draw skinned() with: the level's (layout numbering) or the refined cage's.
+  const std::vector<std::uint32_t>& body_triangles() const { return subdiv_ ? subdiv_->triangles : layout_.triangles; }
   // Deformed bodies of the last simulate(), empty when the rig has no body or skinning is off.
   const SkinnedCrowd& skinned() const { return skinned_; }
 
@@ -121,6 +130,7 @@ class CrowdScene {
   void spawn_track(const CrowdConfig& config);
   void spawn_mocap(const CrowdConfig& config);
   void rebuild_layout();
+  void rebuild_muscle_coefficients();
 
   RigLibrary rigs_;
   RigId rig_id_ = 0;
@@ -137,6 +147,8 @@ class CrowdScene {
   bool muscles_on_ = true;
   MuscleGains gains_;
   SkinLayout layout_;
+  std::shared_ptr<const SubdivSurface> subdiv_;  // set at S levels (owned by the rig's Body; shared)
+  MuscleDisplacementList cage_muscles_;           // S levels: the cage's muscle displacement, this scene's gains
   SkinnedCrowd skinned_;
 };
 

@@ -175,6 +175,40 @@ void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t
     skin_groups_portable(layout, world, f, out.px, out.py, out.pz, out.nx, out.ny, out.nz);
 }
 
+MuscleDisplacementList make_muscle_displacement_list(const SkinLayout& layout, const MuscleBinding& binding,
+                                                     std::span<const std::array<float, kMusclePointsPerVertex>> c) {
+  if (c.size() != binding.size()) throw std::invalid_argument("make_muscle_displacement_list: one coefficient row per bound vertex");
+  std::vector<std::uint32_t> rank(layout.vertex_count, 0xffffffffu);
+  for (std::uint32_t i = 0; i < layout.vertex_count; ++i) rank[layout.original[i]] = i;
+  MuscleDisplacementList list;
+  for (std::size_t b = 0; b < binding.size(); ++b) {
+    if (binding.vertex[b] >= rank.size()) throw std::invalid_argument("make_muscle_displacement_list: vertex out of range");
+    list.vertex.push_back(rank[binding.vertex[b]]);
+    list.point.push_back(binding.point[b]);
+    list.coefficient.push_back(c[b]);
+  }
+  return list;
+}
+
+void apply_muscle_displacement(const MuscleDisplacementList& list, const WalkerLanes& lanes, std::size_t w,
+                               const SkinOutput& out) {
+  if (list.vertex.empty() || lanes.muscle_points == 0) return;
+  const float scale = placement_of(lanes, w).scale;
+  for (std::size_t i = 0; i < list.vertex.size(); ++i) {
+    float d = 0.0f;
+    for (int k = 0; k < kMusclePointsPerVertex; ++k) {
+      const std::uint32_t p = list.point[i][k];
+      if (p >= lanes.muscle_points) throw std::invalid_argument("apply_muscle_displacement: control point out of range");
+      d += list.coefficient[i][k] * lanes.at(lanes.muscle_force, p)[w];
+    }
+    d *= scale;
+    const std::uint32_t v = list.vertex[i];
+    out.px[v] += d * out.nx[v];
+    out.py[v] += d * out.ny[v];
+    out.pz[v] += d * out.nz[v];
+  }
+}
+
 void force_skin_kernel_isa(SkinKernelIsa isa) {
   if (isa == SkinKernelIsa::Avx2Fma && !cpu_has_avx2_fma())
     throw std::invalid_argument("force_skin_kernel_isa: this CPU has no AVX2 + FMA");

@@ -6,7 +6,9 @@
 // Runtime dispatch: the kernel is compiled twice (x86-64-v3, i.e. AVX2 + FMA, and the baseline x86-64 SSE2) and
 // picks the one the CPU runs on first use, so one binary is fast on AVX2 machines and still correct elsewhere.
 // systems/skin_reference.h is its scalar twin; tests hold both compiled bodies to it within 1e-5 m.
+#include <array>
 #include <span>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -25,6 +27,20 @@ struct SkinOutput {
 inline SkinOutput skin_output_in(float* block, std::size_t stride) {
   return {block, block + stride, block + 2 * stride, block + 3 * stride, block + 4 * stride, block + 5 * stride};
 }
+
+// Muscle displacement for a layout skinned without muscle groups (the subdivision cage, whose vertex order the
+// refinement stencils fix): per listed layout vertex its control points and coefficients, as in SkinLayout.
+struct MuscleDisplacementList {
+  std::vector<std::uint32_t> vertex;  // layout index
+  std::vector<std::array<std::uint32_t, kMusclePointsPerVertex>> point;
+  std::vector<std::array<float, kMusclePointsPerVertex>> coefficient;
+};
+MuscleDisplacementList make_muscle_displacement_list(const SkinLayout& layout, const MuscleBinding& binding,
+                                                     std::span<const std::array<float, kMusclePointsPerVertex>> c);
+// Moves the listed vertices of walker `w`'s skinned output along their (skinned, unit) normals by
+// scale * sum_i c_i f[p_i]: the same displacement the muscle groups of skin_walker fuse in.
+void apply_muscle_displacement(const MuscleDisplacementList& list, const WalkerLanes& lanes, std::size_t w,
+                               const SkinOutput& out);
 
 enum class SkinKernelIsa { Auto, Avx2Fma, Portable };
 // Pins the body skin_walker uses (tests run both; Auto = what the CPU supports). Throws std::invalid_argument

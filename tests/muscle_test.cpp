@@ -21,6 +21,8 @@
 #include "systems/frame_script.h"
 #include "systems/muscle.h"
 #include "systems/skin.h"
+#include "systems/skin_kernel.h"
+#include "systems/subdiv.h"
 
 namespace strata {
 namespace {
@@ -390,6 +392,45 @@ TEST(MuscleSystem, SameBytesForOneAndTwoThreads) {
   bool moved = false;
   for (float f : result[0]) moved = moved || std::fabs(f) > 1e-3f;
   EXPECT_TRUE(moved);
+}
+
+}  // namespace
+}  // namespace strata
+
+namespace strata {
+namespace {
+
+// At the subdivision levels the muscle layer displaces the cage before it is refined: nothing at rest, a bulge
+// over the biceps once the elbow flexes.
+TEST(MuscleSystem, DisplacesTheSubdivisionCageBeforeRefinement) {
+  Posed p(subdiv_level(1));
+  ASSERT_EQ(p.scene.body_level(), subdiv_level(1));
+  ASSERT_TRUE(p.scene.rig().muscles->cage.has_value());
+  ASSERT_GT(p.scene.rig().muscles->cage->size(), 100u);
+  // The cage's displacement list built as the frame script builds it, refined with and without it.
+  p.pose(90.0f, 120.0f);
+  const WalkerLanes l = p.scene.lanes();
+  fk_system(p.scene.rig().skeleton, l);
+  muscle_system(p.scene.rig().muscles->set, l);
+  SkinnedCrowd plain, bulged;
+  subdiv_system(*p.scene.subdiv(), l, plain, nullptr);
+  const MuscleRig& m = *p.scene.rig().muscles;
+  const MuscleDisplacementList list =
+      make_muscle_displacement_list(p.scene.subdiv()->cage_layout, *m.cage, muscle_coefficients(m.set, *m.cage));
+  subdiv_system(*p.scene.subdiv(), l, bulged, &list);
+  float largest = 0.0f;
+  for (std::size_t v = 0; v < plain.vertex_count; ++v) {
+    const glm::vec3 d = bulged.position(0, v) - plain.position(0, v);
+    ASSERT_TRUE(std::isfinite(d.x + d.y + d.z));
+    largest = std::max(largest, glm::dot(d, plain.normal(0, v)));
+  }
+  EXPECT_GT(largest, 0.004f) << "the refined surface bulges over the biceps";
+  p.pose(0.0f, 0.0f);
+  fk_system(p.scene.rig().skeleton, l);
+  muscle_system(p.scene.rig().muscles->set, l);
+  subdiv_system(*p.scene.subdiv(), l, plain, nullptr);
+  subdiv_system(*p.scene.subdiv(), l, bulged, &list);
+  for (std::size_t v = 0; v < plain.vertex_count; ++v) ASSERT_EQ(bulged.position(0, v), plain.position(0, v));
 }
 
 }  // namespace
