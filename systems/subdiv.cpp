@@ -10,7 +10,7 @@
 
 namespace strata {
 
-__attribute__((target_clones("avx2,fma", "default"))) void apply_subdiv_stencils(const SubdivStencils& s, const float* __restrict sx, const float* __restrict sy,
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void apply_subdiv_stencils(const SubdivStencils& s, const float* __restrict sx, const float* __restrict sy,
                            const float* __restrict sz, float* __restrict dx, float* __restrict dy,
                            float* __restrict dz) {
   const std::uint32_t* __restrict offsets = s.offsets.data();
@@ -34,7 +34,7 @@ __attribute__((target_clones("avx2,fma", "default"))) void apply_subdiv_stencils
   }
 }
 
-__attribute__((target_clones("avx2,fma", "default"))) void area_weighted_normals(std::span<const std::uint32_t> triangles, std::size_t vertex_count, const float* px,
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void area_weighted_normals(std::span<const std::uint32_t> triangles, std::size_t vertex_count, const float* px,
                            const float* py, const float* pz, float* nx, float* ny, float* nz) {
   std::fill(nx, nx + vertex_count, 0.0f);
   std::fill(ny, ny + vertex_count, 0.0f);
