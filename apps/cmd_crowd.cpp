@@ -114,15 +114,17 @@ int run_crowd(const CrowdOptions& o) {
             // Frame the crowd once from its first pose; a camera that re-fits every frame would pump. Bodies
             // reach past the joints (the skull above skullbase, the soles below the ankles).
             glm::vec3 lo, hi;
-            const bool any = bodies ? scene.skinned().bounds(lo, hi) : joint_bounds(joints, lo, hi);
+            const bool any = bodies ? body_bounds(scene, lo, hi) : joint_bounds(joints, lo, hi);
             if (any) camera.frame_box_tight(lo, hi, aspect);
           } else if (o.follow) {
             glm::vec3 lo, hi;
             if (joint_bounds(joints, lo, hi)) camera.target = 0.5f * (lo + hi);
           }
           SkeletonDrawInput input{&scene.rig().skeleton, joints, scene.walker_count()};
-          const BodyDrawInput body_input = body_draw_input(scene);
-          renderer.render(input, camera.view(), camera.projection(aspect), bodies ? &body_input : nullptr);
+          const std::vector<BodyDrawInput> body_inputs = body_draw_inputs(scene);
+          renderer.render(input, camera.view(), camera.projection(aspect), body_inputs);
+          // From the next frame on, walkers outside this camera are culled and --level auto picks by size.
+          scene.set_view(lod_view(camera, aspect, o.height));
           renderer.read_rgba(pixels);
         }
         if (!o.no_png && f % o.png_every == 0) {
@@ -161,6 +163,10 @@ int run_crowd(const CrowdOptions& o) {
     summary["body_level"] = scene.body_level();
     summary["body_level_name"] = body_level_name(scene.body_level());
     summary["body_vertices"] = bodies ? scene.skinned().vertex_count : 0;
+    const auto lod = scene.lod_counts();
+    // Walkers skinned and drawn at each level in the last frame, and walkers the camera did not see.
+    summary["lod_last_frame"] = {{"level0", lod[0]}, {"level1", lod[1]}, {"level2", lod[2]}, {"culled", lod[3]}};
+    summary["triangles_drawn_last_frame"] = renderer.triangles_drawn();
     summary["clip"] = clip >= 0 ? nlohmann::json(scene.rig().clips[clip].name)
                       : clip == kAllClips ? nlohmann::json("all") : nlohmann::json(nullptr);
     summary["gl_renderer"] = context->renderer();

@@ -114,9 +114,10 @@ int run_view(const ViewOptions& o) {
           framed = true;
         }
         SkeletonDrawInput draw{&scene.rig().skeleton, joints, scene.walker_count()};
-        const BodyDrawInput bodies = body_draw_input(scene);
-        renderer.options().draw_skeleton = bodies.walker_count == 0 || show_skeleton;
-        renderer.render(draw, camera.view(), camera.projection(aspect), bodies.walker_count ? &bodies : nullptr);
+        const std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
+        renderer.options().draw_skeleton = bodies.empty() || show_skeleton;
+        renderer.render(draw, camera.view(), camera.projection(aspect), bodies);
+        scene.set_view(lod_view(camera, aspect, fb.y));  // culling and --level auto follow the orbit camera
         if (input.screenshot) {
           renderer.read_rgba(pixels);
           std::filesystem::create_directories(o.screenshot_dir);

@@ -4,6 +4,7 @@
 #include <tbb/info.h>
 
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -45,14 +46,18 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
           value = std::to_string(subdiv_level(value[1] - '0'));
           return {};
         }
+        if (value == "auto") {
+          value = std::to_string(kAutoBodyLevel);
+          return {};
+        }
         if (value == "-1" || value == "0" || value == "1" || value == "2") return {};
-        return "must be 0, 1, 2, S1, S2, S3 or -1, got '" + value + "'";
+        return "must be 0, 1, 2, auto, S1, S2, S3 or -1, got '" + value + "'";
       },
-      "0|1|2|S1|S2|S3|-1");
+      "0|1|2|auto|S1|S2|S3|-1");
   cmd.add_option("--level", o.level,
-                 "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133); S1, S2, S3: the 1,800-vertex "
-                 "cage skinned and Loop-subdivided 1-3 times every frame (7,194 / 28,770 / 115,074 vertices); "
-                 "-1 for skeletons only")
+                 "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133); auto: each walker by its height "
+                 "on screen (with hysteresis); S1, S2, S3: the 1,800-vertex cage skinned and Loop-subdivided 1-3 "
+                 "times every frame (7,194 / 28,770 / 115,074 vertices); -1 for skeletons only")
       ->capture_default_str()->transform(body_level);
   cmd.add_option("--muscles", o.muscles,
                  "Muscle layer: 'default' (the shipped 12 action lines, data/muscles.json), 'none', or a muscle "
@@ -176,17 +181,40 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
   return scene;
 }
 
-BodyDrawInput body_draw_input(const CrowdScene& scene) {
-  BodyDrawInput input;
-  if (scene.body_level() < 0) return input;
-  const SkinnedCrowd& s = scene.skinned();
-  input.triangles = scene.body_triangles();
-  input.px = s.px.data(), input.py = s.py.data(), input.pz = s.pz.data();
-  input.nx = s.nx.data(), input.ny = s.ny.data(), input.nz = s.nz.data();
-  input.stride = s.stride;
-  input.vertex_count = s.vertex_count;
-  input.walker_count = s.vertex_count ? s.walkers : 0;
-  return input;
+std::vector<BodyDrawInput> body_draw_inputs(const CrowdScene& scene) {
+  std::vector<BodyDrawInput> inputs;
+  for (const CrowdScene::BodyDraw& d : scene.body_draws()) {
+    const SkinnedCrowd& s = *d.skinned;
+    BodyDrawInput input;
+    input.triangles = *d.triangles;
+    input.px = s.px.data(), input.py = s.py.data(), input.pz = s.pz.data();
+    input.nx = s.nx.data(), input.ny = s.ny.data(), input.nz = s.nz.data();
+    input.stride = s.stride;
+    input.vertex_count = s.vertex_count;
+    input.walker_count = s.vertex_count ? s.walkers : 0;
+    inputs.push_back(input);
+  }
+  return inputs;
+}
+
+bool body_bounds(const CrowdScene& scene, glm::vec3& lo, glm::vec3& hi) {
+  bool any = false;
+  for (const CrowdScene::BodyDraw& d : scene.body_draws()) {
+    glm::vec3 a, b;
+    if (!d.skinned->bounds(a, b)) continue;
+    lo = any ? glm::min(lo, a) : a;
+    hi = any ? glm::max(hi, b) : b;
+    any = true;
+  }
+  return any;
+}
+
+LodView lod_view(const OrbitCamera& camera, float aspect, int viewport_height) {
+  LodView v;
+  v.view_projection = camera.projection(aspect) * camera.view();
+  v.eye = camera.eye();
+  v.focal_px = static_cast<float>(viewport_height) / (2.0f * std::tan(0.5f * camera.fov_y));
+  return v;
 }
 
 int thread_count(const SceneOptions& o) { return o.threads > 0 ? o.threads : tbb::info::default_concurrency(); }

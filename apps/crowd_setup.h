@@ -2,7 +2,9 @@
 // What `strata crowd` and `strata view` share: the options that describe the crowd scene, and building it.
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "render/camera.h"
 #include "render/skeleton_renderer.h"
 #include "systems/frame_script.h"
 
@@ -44,9 +46,13 @@ Rig load_mesh_rig(const std::string& path);
 // Loads the rig (LoadError on bad input), resolves the clip and spawns the grid.
 std::unique_ptr<CrowdScene> build_scene(const SceneOptions& options);
 
-// What the renderer needs to draw the scene's skinned bodies from the last simulate(); walker_count is 0 when
-// the scene has no body to draw.
-BodyDrawInput body_draw_input(const CrowdScene& scene);
+// What the renderer needs to draw the scene's skinned bodies from the last simulate(): one input per body level
+// in use (several under --level auto), empty when the scene has no body to draw.
+std::vector<BodyDrawInput> body_draw_inputs(const CrowdScene& scene);
+// Bounds of every skinned vertex drawn; false when none.
+bool body_bounds(const CrowdScene& scene, glm::vec3& lo, glm::vec3& hi);
+// The level-of-detail view (culling, projected sizes) of a camera rendering `viewport_height` pixels high.
+LodView lod_view(const OrbitCamera& camera, float aspect, int viewport_height);
 
 // Worker threads the options ask for, resolved against the machine.
 int thread_count(const SceneOptions& options);

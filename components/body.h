@@ -68,9 +68,15 @@ constexpr bool is_subdiv_level(int level) {
 }
 constexpr int subdiv_level(int depth) { return kSubdivLevelBase + depth; }
 constexpr int subdiv_depth(int level) { return is_subdiv_level(level) ? level - kSubdivLevelBase : 0; }
-// "0", "1", "2", "-1", "S1".."S3".
+// Each walker at its own mesh level, chosen per frame by its projected size (systems/lod.h): `--level auto`.
+inline constexpr int kAutoBodyLevel = 20;
+// "0", "1", "2", "-1", "S1".."S3", "auto".
 inline std::string body_level_name(int level) {
-  return is_subdiv_level(level) ? "S" + std::to_string(subdiv_depth(level)) : std::to_string(level);
+  if (level == kAutoBodyLevel) return "auto";
+  if (!is_subdiv_level(level)) return std::to_string(level);
+  std::string name = "S";  // appended rather than "S" + std::string, which trips GCC 12's -Wrestrict false positive
+  name += std::to_string(subdiv_depth(level));
+  return name;
 }
 
 }  // namespace strata

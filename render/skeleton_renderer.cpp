@@ -20,6 +20,7 @@
 #include <string>
 
 #include <glm/geometric.hpp>
+#include <meshoptimizer.h>
 #include <glm/gtc/type_ptr.hpp>
 
 namespace strata {
@@ -364,20 +365,31 @@ struct SkeletonRenderer::Impl {
   // Kept between frames so steady-state rendering does not allocate.
   std::vector<InstanceRows> bone_instances, joint_instances;
 
-  // Bodies: the six component arrays re-specified per frame in one buffer (orphaning, as for instances); the
-  // index buffer only when the topology changes.
-  GLuint body_program = 0, body_vao = 0, body_components = 0, body_indices = 0;
-  const std::uint32_t* body_topology = nullptr;
-  std::size_t body_index_count = 0, body_vertex_count = 0;
+  // Bodies: the six component arrays re-specified per draw in one buffer (orphaning, as for instances); each
+  // level's index buffer only when its topology changes, reordered once for the post-transform vertex cache
+  // (meshoptimizer), which the same triangles in a different order cost nothing to get.
+  struct BodySlot {
+    GLuint indices = 0;
+    const std::uint32_t* topology = nullptr;
+    std::size_t index_count = 0, vertex_count = 0;
+  };
+  GLuint body_program = 0, body_vao = 0, body_components = 0;
+  std::array<BodySlot, 4> body_slots{};  // one per body level drawn in the same frame
+  std::vector<std::uint32_t> optimized;
   std::vector<GLsizei> body_counts;
   std::vector<const void*> body_offsets;
   std::vector<GLint> body_base_vertices;
+  std::size_t triangles_drawn = 0;
+
+  static bool slot_matches(const BodySlot& slot, const BodyDrawInput& b) {
+    return slot.topology == b.triangles.data() && slot.index_count == b.triangles.size() &&
+           slot.vertex_count == b.vertex_count;
+  }
 
   void create_body_vao() {
     glCreateBuffers(1, &body_components);
-    glCreateBuffers(1, &body_indices);
+    for (BodySlot& slot : body_slots) glCreateBuffers(1, &slot.indices);
     glCreateVertexArrays(1, &body_vao);
-    glVertexArrayElementBuffer(body_vao, body_indices);
     for (GLuint a = 0; a < 6; ++a) {
       glEnableVertexArrayAttrib(body_vao, a);
       glVertexArrayAttribFormat(body_vao, a, 1, GL_FLOAT, GL_FALSE, 0);
@@ -385,16 +397,18 @@ struct SkeletonRenderer::Impl {
     }
   }
 
-  void draw_bodies(const BodyDrawInput& b, const glm::mat4& view, const glm::mat4& projection) {
+  void draw_bodies(const BodyDrawInput& b, BodySlot& slot, const glm::mat4& view, const glm::mat4& projection) {
     if (b.walker_count == 0 || b.triangles.empty()) return;
-    if (b.triangles.data() != body_topology || b.triangles.size() != body_index_count ||
-        b.vertex_count != body_vertex_count) {
-      glNamedBufferData(body_indices, static_cast<GLsizeiptr>(b.triangles.size() * sizeof(std::uint32_t)),
-                        b.triangles.data(), GL_STATIC_DRAW);
-      body_topology = b.triangles.data();
-      body_index_count = b.triangles.size();
-      body_vertex_count = b.vertex_count;
+    if (!slot_matches(slot, b)) {
+      optimized.resize(b.triangles.size());
+      meshopt_optimizeVertexCache(optimized.data(), b.triangles.data(), b.triangles.size(), b.vertex_count);
+      glNamedBufferData(slot.indices, static_cast<GLsizeiptr>(optimized.size() * sizeof(std::uint32_t)),
+                        optimized.data(), GL_STATIC_DRAW);
+      slot.topology = b.triangles.data();
+      slot.index_count = b.triangles.size();
+      slot.vertex_count = b.vertex_count;
     }
+    glVertexArrayElementBuffer(body_vao, slot.indices);
     const std::size_t floats = b.walker_count * b.stride;
     const GLsizeiptr bytes = static_cast<GLsizeiptr>(floats * sizeof(float));
     glNamedBufferData(body_components, 6 * bytes, nullptr, GL_STREAM_DRAW);
@@ -416,6 +430,7 @@ struct SkeletonRenderer::Impl {
     glBindVertexArray(body_vao);
     glMultiDrawElementsBaseVertex(GL_TRIANGLES, body_counts.data(), GL_UNSIGNED_INT, body_offsets.data(),
                                   static_cast<GLsizei>(b.walker_count), body_base_vertices.data());
+    triangles_drawn += b.walker_count * (b.triangles.size() / 3);
   }
 
   void create_targets() {
@@ -460,10 +475,13 @@ struct SkeletonRenderer::Impl {
     destroy_mesh(bone);
     destroy_mesh(joint);
     glDeleteVertexArrays(1, &body_vao);
-    const GLuint body_buffers[] = {body_components, body_indices};
-    glDeleteBuffers(2, body_buffers);
+    glDeleteBuffers(1, &body_components);
+    for (BodySlot& slot : body_slots) {
+      glDeleteBuffers(1, &slot.indices);
+      slot = BodySlot{};
+    }
     glDeleteProgram(body_program);
-    body_vao = body_components = body_indices = body_program = 0;
+    body_vao = body_components = body_program = 0;
     glDeleteVertexArrays(1, &ground_vao);
     glDeleteProgram(mesh_program);
     glDeleteProgram(ground_program);
@@ -586,18 +604,27 @@ void SkeletonRenderer::resize(int width, int height) {
 
 void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
                               const BodyDrawInput* bodies) {
+  render(input, view, projection, bodies ? std::span<const BodyDrawInput>(bodies, 1) : std::span<const BodyDrawInput>());
+}
+
+std::size_t SkeletonRenderer::triangles_drawn() const { return impl_->triangles_drawn; }
+
+void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
+                              std::span<const BodyDrawInput> body_levels) {
   Impl& r = *impl_;
-  if (bodies && bodies->walker_count > 0) {
-    const BodyDrawInput& b = *bodies;
+  if (body_levels.size() > r.body_slots.size())
+    throw std::invalid_argument("skeleton renderer: at most " + std::to_string(r.body_slots.size()) + " body levels per frame");
+  for (std::size_t k = 0; k < body_levels.size(); ++k) {
+    const BodyDrawInput& b = body_levels[k];
+    if (b.walker_count == 0) continue;
     if (!b.px || !b.py || !b.pz || !b.nx || !b.ny || !b.nz || b.stride < b.vertex_count || b.triangles.size() % 3 != 0)
       throw std::invalid_argument("skeleton renderer: body arrays/triangles do not describe " +
                                   std::to_string(b.walker_count) + " walkers of " + std::to_string(b.vertex_count) +
                                   " vertices");
     // Indices are checked when the topology changes (they are uploaded then), not every frame.
-    if (bodies->triangles.data() != r.body_topology || bodies->triangles.size() != r.body_index_count ||
-        bodies->vertex_count != r.body_vertex_count)
-      for (std::uint32_t index : bodies->triangles)
-        if (index >= bodies->vertex_count)
+    if (!Impl::slot_matches(r.body_slots[k], b))
+      for (std::uint32_t index : b.triangles)
+        if (index >= b.vertex_count)
           throw std::invalid_argument("skeleton renderer: body triangle index " + std::to_string(index) +
                                       " out of range");
   }
@@ -663,7 +690,8 @@ void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& v
     draw(r.bone, r.bone_instances, o.bone_color);
     draw(r.joint, r.joint_instances, o.joint_color);
   }
-  if (bodies) r.draw_bodies(*bodies, view, projection);
+  r.triangles_drawn = 0;
+  for (std::size_t k = 0; k < body_levels.size(); ++k) r.draw_bodies(body_levels[k], r.body_slots[k], view, projection);
   glBindVertexArray(0);
 
   glBlitNamedFramebuffer(r.msaa_fbo, r.resolve_fbo, 0, 0, r.width, r.height, 0, 0, r.width, r.height,

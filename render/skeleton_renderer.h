@@ -73,6 +73,11 @@ class SkeletonRenderer {
   // the inputs' sizes disagree.
   void render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
               const BodyDrawInput* bodies = nullptr);
+  // The same with bodies at several levels (up to 4 draws, one per level; each keeps its own index buffer).
+  void render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
+              std::span<const BodyDrawInput> body_levels);
+  // Body triangles submitted by the last render() (walkers x triangles per level).
+  std::size_t triangles_drawn() const;
   // RGBA8 pixels, rows top to bottom (image order), width*height*4 bytes.
   void read_rgba(std::vector<std::uint8_t>& out) const;
   // Copies the FBO to framebuffer 0 (a window), scaled to the given size.

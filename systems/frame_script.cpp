@@ -36,6 +36,16 @@ CrowdScene::CrowdScene(Rig rig) {
   } catch (const std::exception& e) {
     walk_error_ = e.what();
   }
+  // Rest height for projected sizes: the body's, else the skeleton's joint span plus a head's worth.
+  if (r.body && !r.body->levels.empty() && !r.body->levels[0].mesh.positions.empty()) {
+    float lo = 1e30f, hi = -1e30f;
+    for (const glm::vec3& p : r.body->levels[0].mesh.positions) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
+    body_height_ = hi - lo;
+  } else if (!r.skeleton.centers.empty()) {
+    float lo = 1e30f, hi = -1e30f;
+    for (const glm::vec3& c : r.skeleton.centers) lo = std::min(lo, c.y), hi = std::max(hi, c.y);
+    body_height_ = hi - lo + 0.15f;
+  }
   set_body_level(body_level_);
 }
 
@@ -204,15 +214,62 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
     muscle_system(rig().muscles->set, l);
   }
   const int level = body_level();
+  lod_counts_ = {};
   if (subdiv_) {
     STRATA_PROFILE_SCOPE(p, "subdiv");  // cage skinning + refinement + normals
     subdiv_system(*subdiv_, l, skinned_, muscles_enabled() ? &cage_muscles_ : nullptr);
+    lod_counts_[0] = l.count;
+  } else if (level >= 0 && (view_ || level == kAutoBodyLevel)) {
+    const bool automatic = level == kAutoBodyLevel;
+    const int levels = static_cast<int>(rig().body->levels.size());
+    {
+      STRATA_PROFILE_SCOPE(p, "lod");
+      if (view_) {
+        lod_system(*view_, lod_policy_, l, body_height_, automatic ? -1 : level, levels);
+      } else {  // automatic without a camera: everybody at the finest level
+        for (std::size_t w = 0; w < l.count; ++w) l.at(l.lod, 0)[w] = 0.0f;
+      }
+      const std::size_t slots = automatic ? level_layouts_.size() : 1;
+      level_walkers_.resize(slots);
+      for (auto& ids : level_walkers_) ids.clear();
+      for (std::size_t w = 0; w < l.count; ++w) {
+        const int chosen = static_cast<int>(l.at(l.lod, 0)[w]);
+        if (chosen < 0) {
+          ++lod_counts_[3];
+          continue;
+        }
+        ++lod_counts_[static_cast<std::size_t>(std::min(chosen, 2))];
+        level_walkers_[automatic ? static_cast<std::size_t>(chosen) : 0].push_back(static_cast<std::uint32_t>(w));
+      }
+    }
+    STRATA_PROFILE_SCOPE(p, "skin");
+    if (automatic) {
+      level_out_.resize(level_layouts_.size());
+      for (std::size_t k = 0; k < level_layouts_.size(); ++k)
+        skin_system(level_layouts_[k], l, level_out_[k], &level_walkers_[k]);
+    } else {
+      skin_system(layout_, l, skinned_, &level_walkers_[0]);
+    }
   } else if (level >= 0) {
     STRATA_PROFILE_SCOPE(p, "skin");
     skin_system(layout_, l, skinned_);
+    lod_counts_[static_cast<std::size_t>(std::min(level, 2))] = l.count;
   } else {
     skinned_ = SkinnedCrowd{};
   }
+}
+
+std::vector<CrowdScene::BodyDraw> CrowdScene::body_draws() const {
+  std::vector<BodyDraw> draws;
+  const int level = body_level();
+  if (level < 0) return draws;
+  if (level == kAutoBodyLevel) {
+    for (std::size_t k = 0; k < level_out_.size() && k < level_layouts_.size(); ++k)
+      if (level_out_[k].walkers > 0) draws.push_back({static_cast<int>(k), &level_layouts_[k].triangles, &level_out_[k]});
+  } else if (skinned_.walkers > 0) {
+    draws.push_back({level, &body_triangles(), &skinned_});
+  }
+  return draws;
 }
 
 void CrowdScene::set_body_level(int level) {
@@ -235,8 +292,16 @@ void CrowdScene::rebuild_layout() {
   const int used = body_level();
   subdiv_ = is_subdiv_level(used) ? body_subdiv_surface(*rig().body, subdiv_depth(used)) : nullptr;
   layout_ = SkinLayout{};
+  level_layouts_.clear();
+  level_out_.clear();
   cage_muscles_ = MuscleDisplacementList{};
   if (used < 0) return;
+  if (used == kAutoBodyLevel) {
+    for (std::size_t k = 0; k < rig().body->levels.size(); ++k)
+      level_layouts_.push_back(make_skin_layout(rig().body->levels[k], muscles_enabled() ? &rig().muscles->levels[k] : nullptr));
+    if (muscles_enabled()) rebuild_muscle_coefficients();
+    return;
+  }
   if (subdiv_) {
     if (muscles_enabled() && rig().muscles->cage) rebuild_muscle_coefficients();
     return;
@@ -254,6 +319,11 @@ void CrowdScene::rebuild_muscle_coefficients() {
     return;
   }
   const int used = body_level();
+  if (used == kAutoBodyLevel) {
+    for (std::size_t k = 0; k < level_layouts_.size(); ++k)
+      if (level_layouts_[k].has_muscles()) set_muscle_coefficients(level_layouts_[k], muscle_coefficients(m.set, m.levels[k], gains_));
+    return;
+  }
   if (used < 0 || !layout_.has_muscles()) return;
   const MuscleBinding& binding = m.levels[static_cast<std::size_t>(used)];
   set_muscle_coefficients(layout_, muscle_coefficients(m.set, binding, gains_));
@@ -263,6 +333,7 @@ int CrowdScene::body_level() const {
   const Body* body = rig().body.get();
   if (!body || body->levels.empty() || body_level_ < 0) return -1;
   if (is_subdiv_level(body_level_)) return body->cage ? body_level_ : 0;
+  if (body_level_ == kAutoBodyLevel) return kAutoBodyLevel;
   return std::min(body_level_, static_cast<int>(body->levels.size()) - 1);
 }
 

@@ -14,7 +14,9 @@
 //          5. skin        rig body level (+ muscle displacement) -> deformed world-space vertices, when the rig
 //                         has a body (systems/skin.h)
 //             or subdiv   at levels S1..S3: skin (+ muscle-displace) the cage, refine it (systems/subdiv.h)
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -29,6 +31,7 @@
 #include "profiling/profiler.h"
 #include "motion/retarget.h"
 #include "systems/locomotion.h"
+#include "systems/lod.h"
 #include "systems/mocap_drive.h"
 #include "systems/skin.h"
 #include "systems/subdiv.h"
@@ -101,6 +104,23 @@ class CrowdScene {
   void set_muscle_gains(MuscleGains gains);
   const MuscleGains& muscle_gains() const { return gains_; }
 
+  // Level of detail (systems/lod.h). With a view set, walkers outside it are culled (neither skinned nor drawn);
+  // at kAutoBodyLevel each visible walker also gets a mesh level from its projected height, with hysteresis.
+  // Without a view every walker is skinned (at level 0 under the automatic policy).
+  void set_view(const LodView& view) { view_ = view; }
+  void clear_view() { view_.reset(); }
+  LodPolicy& lod_policy() { return lod_policy_; }
+  // Walkers skinned at levels 0, 1, 2 by the last simulate(), and walkers culled.
+  std::array<std::size_t, 4> lod_counts() const { return lod_counts_; }
+  // What to draw after simulate(): per level in use, its triangles (in its SkinnedCrowd's vertex order) and
+  // the skinned walkers (blocks; walker_ids name them when not all walkers are there).
+  struct BodyDraw {
+    int level = 0;
+    const std::vector<std::uint32_t>* triangles = nullptr;
+    const SkinnedCrowd* skinned = nullptr;
+  };
+  std::vector<BodyDraw> body_draws() const;
+
   // The refined cage drawn at S levels, else null.
   const SubdivSurface* subdiv() const { return subdiv_.get(); }
   // The triangles to draw skinned() with: the level's (layout numbering) or the refined cage's.
@@ -150,6 +170,13 @@ class CrowdScene {
   std::shared_ptr<const SubdivSurface> subdiv_;  // set at S levels (owned by the rig's Body; shared)
   MuscleDisplacementList cage_muscles_;           // S levels: the cage's muscle displacement, this scene's gains
   SkinnedCrowd skinned_;
+  std::optional<LodView> view_;
+  LodPolicy lod_policy_;
+  float body_height_ = 1.75f;                   // rest height of the rig's body (m), for projected sizes
+  std::vector<SkinLayout> level_layouts_;       // kAutoBodyLevel: every mesh level's layout
+  std::vector<SkinnedCrowd> level_out_;         // kAutoBodyLevel: the walkers skinned at each level
+  std::vector<std::vector<std::uint32_t>> level_walkers_;  // walkers per level this frame (ascending)
+  std::array<std::size_t, 4> lod_counts_{};
 };
 
 }  // namespace strata

@@ -5,6 +5,7 @@
 // Each walker goes through the vectorised kernel over the level's SkinLayout (systems/skin_kernel.h), walkers
 // in parallel. Determinism: every walker's output depends only on its own inputs, so any thread count gives
 // the same bytes.
+#include <cstdint>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -24,6 +25,9 @@ struct SkinnedCrowd {
   std::size_t stride = 0;
   std::size_t walkers = 0;
   AlignedBuffer<float> px, py, pz, nx, ny, nz;
+  // Which walker (row of the walker table) each block belongs to, when only some walkers were skinned (culling,
+  // per-walker levels); empty when block w is walker w.
+  std::vector<std::uint32_t> walker_ids;
 
   glm::vec3 position(std::size_t walker, std::size_t v) const {
     const std::size_t i = walker * stride + v;
@@ -37,6 +41,9 @@ struct SkinnedCrowd {
   bool bounds(glm::vec3& lo, glm::vec3& hi) const;
 };
 
-void skin_system(const SkinLayout& layout, const WalkerLanes& lanes, SkinnedCrowd& out);
+// Skins every walker, or only `walkers` when given (rows of the walker table, in the order their blocks are
+// written; out.walker_ids records them).
+void skin_system(const SkinLayout& layout, const WalkerLanes& lanes, SkinnedCrowd& out,
+                 const std::vector<std::uint32_t>* walkers = nullptr);
 
 }  // namespace strata

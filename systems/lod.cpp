@@ -1,0 +1,64 @@
+#include "systems/lod.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
+
+namespace strata {
+namespace {
+
+// Is the sphere at least partly inside the frustum? The six planes come straight from the rows of the
+// view-projection matrix (Gribb & Hartmann): for clip = M p, inside means -w <= x, y, z <= w.
+bool sphere_visible(const glm::mat4& m, const glm::vec3& c, float r) {
+  const glm::vec4 row0(m[0][0], m[1][0], m[2][0], m[3][0]);
+  const glm::vec4 row1(m[0][1], m[1][1], m[2][1], m[3][1]);
+  const glm::vec4 row2(m[0][2], m[1][2], m[2][2], m[3][2]);
+  const glm::vec4 row3(m[0][3], m[1][3], m[2][3], m[3][3]);
+  const glm::vec4 planes[6] = {row3 + row0, row3 - row0, row3 + row1, row3 - row1, row3 + row2, row3 - row2};
+  const glm::vec4 p(c, 1.0f);
+  for (const glm::vec4& plane : planes) {
+    const float length = glm::length(glm::vec3(plane));
+    if (!(length > 0.0f)) continue;
+    if (glm::dot(plane, p) < -r * length) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int lod_decide(const LodView& view, const LodPolicy& policy, const glm::vec3& center, float radius, float height,
+               int previous, int fixed_level, int levels) {
+  if (!sphere_visible(view.view_projection, center, radius)) return -1;
+  if (fixed_level >= 0) return fixed_level;
+  const float distance = std::max(glm::length(center - view.eye), 1e-3f);
+  const float pixels = view.focal_px * height / distance;
+  const float thresholds[2] = {policy.level0_px, policy.level1_px};
+  // The plain choice; then, against the previous level, thresholds raised by the hysteresis factor to move
+  // finer and lowered by it to move coarser, so a walker sitting on a threshold keeps its level.
+  auto pick = [&](float scale) { return pixels > thresholds[0] * scale ? 0 : pixels > thresholds[1] * scale ? 1 : 2; };
+  int level = pick(1.0f);
+  if (previous >= 0 && previous <= 2 && level != previous) {
+    const float h = std::max(policy.hysteresis, 1.0f);
+    level = level < previous ? std::min(previous, pick(h)) : std::max(previous, pick(1.0f / h));
+  }
+  return std::clamp(level, 0, std::max(levels - 1, 0));
+}
+
+void lod_system(const LodView& view, const LodPolicy& policy, const WalkerLanes& lanes, float body_height,
+                int fixed_level, int levels) {
+  for (std::size_t w = 0; w < lanes.count; ++w) {
+    const Placement P = placement_of(lanes, w);
+    // The root's posed position (F(0)'s translation, humanoid space) placed in the world; the sphere reaches
+    // the head, the feet and outstretched arms.
+    const glm::vec3 root(lanes.at(lanes.world, 9)[w], lanes.at(lanes.world, 10)[w], lanes.at(lanes.world, 11)[w]);
+    const float height = body_height * P.scale;
+    const glm::vec3 center = P.point(root);
+    float& lod = lanes.at(lanes.lod, 0)[w];
+    const int previous = static_cast<int>(lod);
+    lod = static_cast<float>(lod_decide(view, policy, center, 0.75f * height, height, previous, fixed_level, levels));
+  }
+}
+
+}  // namespace strata
