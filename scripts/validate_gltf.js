@@ -33,7 +33,7 @@ async function main() {
     const info = report.info || {};
     console.log(`${file}: ${i.numErrors} errors, ${i.numWarnings} warnings, ${i.numInfos} infos, ${i.numHints} ` +
                 `hints (validator ${report.validatorVersion}; ${info.totalVertexCount} vertices, ` +
-                `${info.totalTriangleCount} triangles, ${info.animationCount} animation, ${info.skinCount} skin)`);
+                `${info.totalTriangleCount} triangles, ${info.animationCount} animation, skins: ${info.hasSkins}, max influences ${info.maxInfluences})`);
     for (const m of i.messages) {
       if (m.severity <= 1) console.log(`  ${m.severity === 0 ? 'error' : 'warning'} ${m.code} at ${m.pointer}: ${m.message}`);
     }
