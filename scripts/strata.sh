@@ -13,7 +13,8 @@ BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
 JOBS="${JOBS:-$(nproc)}"
 
 # Debian 12 packages the build, the tests and headless rendering need. xvfb/xauth only serve the windowed
-# viewer's smoke test; Mesa's llvmpipe (libgl1-mesa-dri, libegl-mesa0) renders headless through EGL.
+# viewer's smoke test; Mesa's llvmpipe (libgl1-mesa-dri, libegl-mesa0) renders headless through EGL. ffmpeg
+# (27 MB with --no-install-recommends) lets `strata crowd` write crowd.mp4 and the tests check it.
 PACKAGES=(
   cmake ninja-build g++ pkg-config
   libglm-dev libglfw3-dev libosd-dev libtinygltf-dev libopenimageio-dev
@@ -21,6 +22,7 @@ PACKAGES=(
   libpugixml-dev libtbb-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev libmeshoptimizer-dev
   xvfb xauth
+  ffmpeg
 )
 
 install_missing() {
