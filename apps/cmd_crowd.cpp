@@ -215,7 +215,8 @@ int run_crowd(const CrowdOptions& o) {
               << context->renderer() << ", " << threads << " threads, " << wall << " s wall\n";
     profiler.print_table(std::cout);
     if (!table1.empty()) {
-      std::cout << "Table 1 (fps: simulate + render + read-back of all " << scene.walker_count() << " walkers)\n"
+      std::cout << "Table 1 (fps: simulate + render + read-back, " << scene.walker_count()
+                << (scene.walker_count() == 1 ? " walker)\n" : " walkers)\n")
                 << "level  vertices  triangles  one joint  two joints     fps  measured over\n";
       for (const Table1Row& r : table1) {
         char fps[32] = "-", line[160];

@@ -154,6 +154,8 @@ class TempFile {
 GltfExportStats write_gltf_binary(const std::filesystem::path& path, const Skeleton& skeleton, const BodyLevel& level,
                                   const AnimationClip* clip, const std::string& name) {
   GlbBuilder out(path.string());
+  if (path.empty() || !path.has_filename()) out.fail("not a file name");
+  if (std::filesystem::is_directory(path)) out.fail("is a directory");
   tinygltf::Model& model = out.model();
   const std::size_t joints = skeleton.joint_count();
   const Mesh& mesh = level.mesh;

@@ -357,12 +357,18 @@ TEST(ExportErrors, UnwritablePathsAreOneLineErrorsAndLeaveNoFile) {
   fs::create_directories(dir);
   const fs::path not_a_dir = dir / "plain_file";
   std::ofstream(not_a_dir) << "x";
-  for (const fs::path& bad : {not_a_dir / "walker.glb", dir / "missing_dir" / "walker.glb"}) {
+  for (const fs::path& bad : {not_a_dir / "walker.glb", dir / "missing_dir" / "walker.glb", dir / "sub" / ""}) {
     const std::string message = export_error([&] { write_gltf_binary(bad, rig.skeleton, body, nullptr); });
     EXPECT_EQ(message.rfind(bad.string() + ": ", 0), 0u) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
     EXPECT_FALSE(fs::exists(bad));
   }
+  // A directory is not replaced.
+  fs::create_directories(dir / "a_directory");
+  EXPECT_NE(export_error([&] { write_gltf_binary(dir / "a_directory", rig.skeleton, body, nullptr); }).find("is a directory"),
+            std::string::npos);
+  EXPECT_TRUE(fs::is_directory(dir / "a_directory"));
+  fs::remove(dir / "a_directory");
   // A binding that does not fit the mesh: an error before anything is written, nothing left behind.
   BodyLevel broken = body;
   broken.binding.joints.pop_back();
