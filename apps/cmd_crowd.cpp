@@ -14,6 +14,7 @@
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/crowd_setup.h"
+#include "apps/crowd_outputs.h"
 #include "io/image_writer.h"
 #include "profiling/profiler.h"
 #include "render/camera.h"
@@ -40,6 +41,9 @@ struct CrowdOptions {
   float camera_pitch = 0.25f;
   bool follow = false;
   bool skeleton_overlay = false;
+  bool mp4 = false;                // --mp4: ask for the video (a note, not an error, when ffmpeg is absent)
+  bool no_mp4 = false;             // --no-mp4; neither flag: a video whenever ffmpeg is on PATH
+  std::size_t table1_frames = 5;   // frames timed at each body level not drawn, for summary.json's table1
 };
 
 // One line that rewrites itself; only when stderr is a terminal, so logs and CI output stay clean.
@@ -99,12 +103,22 @@ int run_crowd(const CrowdOptions& o) {
     const float dt = 1.0f / o.fps;
     const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
     std::size_t written = 0;
+    std::unique_ptr<Mp4Writer> mp4;
+    if (!o.no_mp4) {
+      const fs::path ffmpeg = find_on_path("ffmpeg");
+      if (ffmpeg.empty())
+        std::cerr << "strata crowd: ffmpeg is not on PATH; no crowd.mp4 (install ffmpeg for a video)\n";
+      else
+        mp4 = std::make_unique<Mp4Writer>(ffmpeg, fs::path(o.out) / "crowd.mp4", o.width, o.height, o.fps);
+    }
+    double simulate_render_s = 0.0;  // simulate + render + read-back, without writing outputs: Table 1's fps
     const auto wall_start = std::chrono::steady_clock::now();
 
     for (std::size_t f = 0; f < o.frames; ++f) {
       profiler.begin_frame();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
+        const auto frame_start = std::chrono::steady_clock::now();
         scene.simulate(dt, profiler);
         {
           STRATA_PROFILE_SCOPE(profiler, "render");
@@ -127,6 +141,11 @@ int run_crowd(const CrowdOptions& o) {
           scene.set_view(lod_view(camera, aspect, o.height));
           renderer.read_rgba(pixels);
         }
+        simulate_render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - frame_start).count();
+        if (mp4) {
+          STRATA_PROFILE_SCOPE(profiler, "write_mp4");
+          mp4->write(pixels);
+        }
         if (!o.no_png && f % o.png_every == 0) {
           STRATA_PROFILE_SCOPE(profiler, "write_png");
           char name[32];
@@ -140,6 +159,7 @@ int run_crowd(const CrowdOptions& o) {
       bar.update(f + 1, elapsed > 0 ? static_cast<double>(f + 1) / elapsed : 0.0);
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    const std::size_t mp4_frames = mp4 ? mp4->finish() : 0;
 
     profiler.write_chrome_trace(fs::path(o.out) / "profile.json");
     profiler.write_csv(fs::path(o.out) / "profile.csv");
@@ -179,12 +199,41 @@ int run_crowd(const CrowdOptions& o) {
       systems.push_back({{"name", s.name}, {"samples", s.samples}, {"min_ms", s.min_ms}, {"mean_ms", s.mean_ms},
                          {"p95_ms", s.p95_ms}, {"max_ms", s.max_ms}});
     summary["systems"] = systems;
+    summary["mp4"] = mp4 ? nlohmann::json("crowd.mp4") : nlohmann::json(nullptr);
+    // The paper's Table 1, one row per body level. Measured after everything above (state_hash included), since
+    // timing the other levels walks the crowd on.
+    // A profiler of its own, so the extra frames stay out of the timings reported above.
+    Profiler table1_profiler(1, false);
+    const std::vector<Table1Row> table1 = measure_table1(
+        scene, static_cast<double>(o.frames) / simulate_render_s, o.frames, o.table1_frames, [&] {
+          scene.simulate(dt, table1_profiler);
+          WalkerLanes lanes = scene.lanes();
+          gather_joint_positions(lanes, joints);
+          SkeletonDrawInput input{&scene.rig().skeleton, joints, scene.walker_count()};
+          renderer.render(input, camera.view(), camera.projection(aspect), body_draw_inputs(scene));
+          renderer.read_rgba(pixels);
+        });
+    summary["table1"] = table1_json(table1);
     write_json_file(fs::path(o.out) / "summary.json", summary);
 
     std::cout << "strata crowd: " << scene.walker_count() << " walkers x " << o.frames << " frames, "
               << scene.rig().skeleton.joint_count() << " joints each, " << o.width << "x" << o.height << " on "
               << context->renderer() << ", " << threads << " threads, " << wall << " s wall\n";
     profiler.print_table(std::cout);
+    if (!table1.empty()) {
+      std::cout << "Table 1 (fps: simulate + render + read-back, " << scene.walker_count()
+                << (scene.walker_count() == 1 ? " walker)\n" : " walkers)\n")
+                << "level  vertices  triangles  one joint  two joints     fps  measured over\n";
+      for (const Table1Row& r : table1) {
+        char fps[32] = "-", line[160];
+        if (r.fps) std::snprintf(fps, sizeof fps, "%.1f", *r.fps);
+        std::snprintf(line, sizeof line, "%5d  %8zu  %9zu  %9zu  %10zu  %6s  %s\n", r.level, r.vertices, r.triangles,
+                      r.one_joint, r.two_joints, fps,
+                      r.fps ? (std::to_string(r.fps_frames) + " frames, " + r.fps_source).c_str() : "not measured");
+        std::cout << line;
+      }
+    }
+    if (mp4) std::cout << "wrote crowd.mp4 (" << mp4_frames << " frames)\n";
     std::cout << "wrote " << written << " frames, profile.json, profile.csv, summary.json to " << o.out << "\n";
   } catch (const std::exception& e) {
     std::cerr << "strata crowd: " << e.what() << "\n";
@@ -214,6 +263,11 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
   cmd->add_flag("--no-png", o->no_png, "Render but write no frames");
   cmd->add_flag("!--no-progress", o->progress, "Hide the progress bar");
+  cmd->add_flag("--mp4", o->mp4, "Write crowd.mp4 through ffmpeg (the default whenever ffmpeg is on PATH)");
+  cmd->add_flag("--no-mp4", o->no_mp4, "Write no video even when ffmpeg is on PATH")->excludes("--mp4");
+  cmd->add_option("--table1-frames", o->table1_frames,
+                  "Frames timed at each body level not drawn, for the fps column of summary.json's table1 (0: none)")
+      ->capture_default_str()->check(CLI::Range(std::size_t{0}, std::size_t{100'000}));
   cmd->callback([o, &exit_code] { exit_code = run_crowd(*o); });
 }
 

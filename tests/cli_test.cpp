@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -23,9 +24,9 @@ struct Result {
   std::string out;  // stdout and stderr together
 };
 
-Result run(const std::string& args) {
+Result run(const std::string& args, const std::string& env_assignments = "") {
   // DISPLAY unset: headless rendering must not need an X server.
-  std::string cmd = "env -u DISPLAY " + std::string(STRATA_BINARY) + " " + args + " 2>&1";
+  std::string cmd = "env -u DISPLAY " + env_assignments + " " + std::string(STRATA_BINARY) + " " + args + " 2>&1";
   Result r;
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) return r;
@@ -304,6 +305,89 @@ TEST(StrataCrowd, UnknownClipIsAOneLineError) {
   Result r = run("crowd --walkers 1 --frames 1 --clip no_such_clip --no-progress --out " + scratch("c").string());
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.out.find("no_such_clip"), std::string::npos) << r.out;
+}
+
+// --- crowd outputs: Table 1 and the MP4 ----------------------------------------------------------------------
+
+TEST(StrataCrowd, SummaryHasTable1WithARowPerBodyLevel) {
+  fs::path out = scratch("table1");
+  Result r = run("crowd --walkers 2 --frames 3 --width 96 --height 64 --level 1 --no-png --no-mp4 --no-progress "
+                 "--table1-frames 2 --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto& table = summary.at("table1");
+  ASSERT_EQ(table.size(), 3u) << table.dump();
+  for (int level = 0; level < 3; ++level) {
+    const auto& row = table.at(level);
+    EXPECT_EQ(row.at("level"), level);
+    const auto vertices = row.at("vertices").get<std::size_t>();
+    EXPECT_EQ(row.at("vertices_one_joint").get<std::size_t>() + row.at("vertices_two_joints").get<std::size_t>() +
+                  row.at("vertices_more_joints").get<std::size_t>(),
+              vertices) << "every vertex is bound to one joint or more";
+    EXPECT_GT(row.at("vertices_two_joints").get<std::size_t>(), 0u);
+    if (level > 0) {
+      EXPECT_LT(vertices, table.at(level - 1).at("vertices").get<std::size_t>()) << "levels get coarser";
+      EXPECT_LT(row.at("triangles").get<std::size_t>(), table.at(level - 1).at("triangles").get<std::size_t>());
+    }
+    EXPECT_GT(row.at("fps").get<double>(), 0.0);
+    EXPECT_EQ(row.at("fps_source"), level == 1 ? "crowd run" : "extra pass");
+    EXPECT_EQ(row.at("fps_frames"), level == 1 ? 3 : 2);
+  }
+  EXPECT_EQ(table.at(1).at("vertices"), summary.at("body_vertices")) << "the drawn level's row is the drawn mesh";
+  EXPECT_NE(r.out.find("Table 1"), std::string::npos) << r.out;
+
+  // Without extra frames the levels not drawn have no fps; skeletons only have no table.
+  Result none = run("crowd --walkers 1 --frames 1 --width 64 --height 48 --no-png --no-mp4 --no-progress "
+                    "--table1-frames 0 --out " + out.string());
+  ASSERT_EQ(none.status, 0) << none.out;
+  summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_TRUE(summary.at("table1").at(1).at("fps").is_null());
+  EXPECT_FALSE(summary.at("table1").at(0).at("fps").is_null()) << "level 0 was drawn";
+  Result bones = run("crowd --walkers 1 --frames 1 --width 64 --height 48 --no-png --no-mp4 --no-progress --level -1 "
+                     "--out " + out.string());
+  ASSERT_EQ(bones.status, 0) << bones.out;
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(out / "summary.json")).at("table1").empty());
+}
+
+bool on_path(const char* program) { return std::system(("command -v " + std::string(program) + " >/dev/null").c_str()) == 0; }
+
+TEST(StrataCrowd, WritesAnMp4ThroughFfmpeg) {
+  if (!on_path("ffmpeg")) GTEST_SKIP() << "ffmpeg is not installed (scripts/strata.sh installs it)";
+  fs::path out = scratch("mp4");
+  // An odd size: yuv420p needs even dimensions, so the writer crops one row and column.
+  Result r = run("crowd --walkers 2 --frames 5 --width 97 --height 65 --level 2 --no-png --no-progress "
+                 "--table1-frames 0 --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  ASSERT_TRUE(fs::exists(out / "crowd.mp4"));
+  EXPECT_GT(fs::file_size(out / "crowd.mp4"), 0u);
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(out / "summary.json")).at("mp4"), "crowd.mp4");
+  if (!on_path("ffprobe")) return;
+  FILE* probe = popen(("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                       "stream=width,height,nb_read_frames -of csv=p=0 " + (out / "crowd.mp4").string()).c_str(), "r");
+  ASSERT_NE(probe, nullptr);
+  char line[128] = {};
+  ASSERT_NE(fgets(line, sizeof line, probe), nullptr);
+  pclose(probe);
+  EXPECT_EQ(std::string(line), "96,64,5\n");
+}
+
+TEST(StrataCrowd, NoFfmpegIsANoteNotAnError) {
+  fs::path out = scratch("no_ffmpeg");
+  // An empty PATH: no ffmpeg to find. The binary is called by its absolute path.
+  Result r = run("crowd --walkers 1 --frames 2 --width 64 --height 48 --level 2 --no-png --no-progress "
+                 "--table1-frames 0 --out " + out.string(), "PATH=/nonexistent");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const std::string note = "ffmpeg is not on PATH";
+  const std::size_t first = r.out.find(note);
+  EXPECT_NE(first, std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find(note, first + 1), std::string::npos) << "said once: " << r.out;
+  EXPECT_FALSE(fs::exists(out / "crowd.mp4"));
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(out / "summary.json")).at("mp4").is_null());
+
+  Result quiet = run("crowd --walkers 1 --frames 1 --width 64 --height 48 --no-png --no-mp4 --no-progress "
+                     "--table1-frames 0 --out " + out.string());
+  ASSERT_EQ(quiet.status, 0) << quiet.out;
+  EXPECT_EQ(quiet.out.find(note), std::string::npos) << "--no-mp4 asks for no video, so nothing to say";
 }
 
 }  // namespace

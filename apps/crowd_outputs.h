@@ -1,0 +1,63 @@
+#pragma once
+// Outputs of `strata crowd` beside frames and profile: the paper's Table 1 for the rig's body levels, and an MP4
+// of the rendered frames through an ffmpeg child process.
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "systems/frame_script.h"
+
+namespace strata::cli {
+
+// One row of the paper's Table 1 (vertices, triangles, vertices bound to one and to two joints, frames per second)
+// for one body level of the crowd's rig, plus where the fps figure comes from.
+struct Table1Row {
+  int level = 0;
+  std::size_t vertices = 0, triangles = 0, one_joint = 0, two_joints = 0, more_joints = 0;
+  std::optional<double> fps;  // simulate + render + read-back of the whole crowd, per second; none if not measured
+  std::size_t fps_frames = 0; // frames the fps was measured over
+  std::string fps_source;     // "crowd run" (the level drawn) or "extra pass" (measured after it)
+};
+
+// Rows for every level of the scene's rig body (none without a body). The drawn level gets `drawn_fps` over
+// `drawn_frames`; every other level is switched to and timed over `extra_frames` calls of `frame` (one untimed
+// call first, so buffer uploads for the new level are not counted), then the drawn level is restored. With
+// extra_frames = 0 the other levels get no fps. `frame` must simulate one frame and render it as the crowd run
+// does, so the numbers compare.
+std::vector<Table1Row> measure_table1(CrowdScene& scene, double drawn_fps, std::size_t drawn_frames,
+                                      std::size_t extra_frames, const std::function<void()>& frame);
+nlohmann::json table1_json(const std::vector<Table1Row>& rows);
+
+// The first executable `name` on PATH, or empty.
+std::filesystem::path find_on_path(const std::string& name);
+
+// Raw RGBA frames (top row first) piped into `ffmpeg -f rawvideo -pix_fmt rgba -s WxH -r FPS -i - ... out.mp4`
+// (yuv420p, cropped to even dimensions, which yuv420p needs). ffmpeg's own messages go to its stderr at level
+// "error" only.
+class Mp4Writer {
+ public:
+  // Starts ffmpeg; throws std::runtime_error when it cannot be started.
+  Mp4Writer(const std::filesystem::path& ffmpeg, const std::filesystem::path& out, int width, int height, float fps);
+  ~Mp4Writer();
+  Mp4Writer(const Mp4Writer&) = delete;
+  Mp4Writer& operator=(const Mp4Writer&) = delete;
+
+  // Throws std::runtime_error when ffmpeg stopped reading (it failed).
+  void write(const std::vector<std::uint8_t>& rgba);
+  // Waits for ffmpeg; throws std::runtime_error naming the file when it failed. Frames written so far.
+  std::size_t finish();
+
+ private:
+  std::filesystem::path out_;
+  std::size_t frame_bytes_ = 0;
+  std::size_t frames_ = 0;
+  FILE* pipe_ = nullptr;
+};
+
+}  // namespace strata::cli
