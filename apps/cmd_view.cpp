@@ -1,5 +1,5 @@
 // strata view: the crowd scene in a GLFW window with an orbit camera. Left-drag orbits, right/middle-drag pans,
-// the wheel zooms; Space pauses, N single-steps, S saves a screenshot, L cycles the body level (0, 1, 2, S1, S2,
+// the wheel zooms; Space pauses, N single-steps, S saves a screenshot, L cycles the body level (0, 1, 2, auto, S1, S2,
 // S3), Esc/Q quits. The window title carries
 // the live per-system timings; the full table prints on exit.
 #include <CLI/CLI.hpp>
@@ -76,17 +76,17 @@ int run_view(const ViewOptions& o) {
       if (input.quit) break;
       if (input.toggle_pause) paused = !paused;
       if (input.level_steps > 0 && scene.body_level() >= 0) {
-        // The levels this body has: its meshes, then S1..S3 when it has a cage.
+        // The levels this body has: its meshes, automatic, then S1..S3 when it has a cage.
         std::vector<int> levels;
         for (std::size_t l = 0; l < scene.rig().body->levels.size(); ++l) levels.push_back(static_cast<int>(l));
+        levels.push_back(kAutoBodyLevel);
         if (scene.rig().body->cage)
           for (int d = 1; d <= kMaxSubdivDepth; ++d) levels.push_back(subdiv_level(d));
         const auto at = std::find(levels.begin(), levels.end(), scene.body_level());
         const std::size_t from = at == levels.end() ? 0 : static_cast<std::size_t>(at - levels.begin());
         scene.set_body_level(levels[(from + static_cast<std::size_t>(input.level_steps)) % levels.size()]);
         scene.simulate(0.0f, profiler);  // fill the new level's output before it is drawn
-        std::cout << "strata view: body level " << body_level_name(scene.body_level()) << ", "
-                  << scene.body_triangles().size() / 3 << " triangles per walker\n";
+        std::cout << "strata view: body level " << body_level_name(scene.body_level()) << "\n";
       }
       if (input.resized) {
         fb = window.framebuffer_size();
