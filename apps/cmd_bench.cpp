@@ -42,7 +42,9 @@ int run_bench(const BenchOptions& o) {
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double frame_ms = 1000.0 * seconds / static_cast<double>(o.frames);
-    const std::size_t vertices = scene->skinned().vertex_count;
+    // Vertices per walker of the (finest) level drawn; under --level auto with no camera every walker is at 0.
+    const auto draws = scene->body_draws();
+    const std::size_t vertices = draws.empty() ? 0 : draws.front().skinned->vertex_count;
     nlohmann::json j;
     j["walkers"] = scene->walker_count();
     j["frames"] = o.frames;
