@@ -1,9 +1,11 @@
-// strata bench: the full simulation (locomotion, IK, FK, skinning; no rendering) of N walkers for F frames, with
-// per-system timings, total frame time and walkers per second.
+// strata bench: the full simulation (locomotion, IK, FK, muscle, skinning; no rendering) of N walkers for F frames,
+// with per-system timings, total frame time and walkers per second. With --render, also the crowd render pass
+// against raw instanced drawing of the same triangles, in the same run.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -11,6 +13,9 @@
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/crowd_setup.h"
+#include "render/camera.h"
+#include "render/gl_context.h"
+#include "render/skeleton_renderer.h"
 
 namespace strata::cli {
 namespace {
@@ -20,7 +25,68 @@ struct BenchOptions {
   std::size_t frames = 120;
   float fps = 60.0f;
   std::string json;
+  bool render = false;
+  int width = 1280, height = 720;
 };
+
+// The crowd render pass (skinned bodies streamed every frame, one multi-draw per level) against the fastest way
+// to draw the same triangles: each level's mesh uploaded once and drawn with glDrawElementsInstanced, one copy per
+// walker at its position. Same target, material and camera; ground and skeletons off; each timed to glFinish.
+nlohmann::json render_bench(CrowdScene& scene, const BenchOptions& o) {
+  auto context = create_headless_gl_context();
+  SkeletonRenderer renderer(o.width, o.height);
+  renderer.options().draw_ground = false;
+  renderer.options().draw_skeleton = false;
+  const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
+  OrbitCamera camera;
+  glm::vec3 lo, hi;
+  Profiler unused(1, false);
+  scene.simulate(1.0f / o.fps, unused);
+  if (!body_bounds(scene, lo, hi)) throw std::runtime_error("--render needs a body (--level 0, 1, 2, auto or S1..S3)");
+  camera.frame_box_tight(lo, hi, aspect);
+  scene.set_view(lod_view(camera, aspect, o.height));
+  SkeletonDrawInput none{&scene.rig().skeleton, {}, 0};
+  double crowd_s = 0.0, raw_s = 0.0;
+  std::size_t crowd_triangles = 0, raw_triangles = 0;
+  std::vector<glm::vec3> offsets;
+  for (std::size_t f = 0; f < std::min<std::size_t>(o.frames, 30); ++f) {
+    scene.simulate(1.0f / o.fps, unused);
+    const std::vector<BodyDrawInput> inputs = body_draw_inputs(scene);
+    const auto draws = scene.body_draws();
+    renderer.finish();
+    auto t0 = std::chrono::steady_clock::now();
+    renderer.render(none, camera.view(), camera.projection(aspect), inputs);
+    renderer.finish();
+    auto t1 = std::chrono::steady_clock::now();
+    if (f > 0) crowd_s += std::chrono::duration<double>(t1 - t0).count(), crowd_triangles += renderer.triangles_drawn();
+    // The reference: per level, that level's mesh (the first skinned walker's, placed at the origin) instanced
+    // at every walker of the level, which moves it as far as the walker went.
+    for (std::size_t k = 0; k < inputs.size(); ++k) {
+      const SkinnedCrowd& skin = *draws[k].skinned;
+      offsets.clear();
+      const glm::vec3 first = skin.position(0, 0);
+      for (std::size_t w = 0; w < skin.walkers; ++w) offsets.push_back(skin.position(w, 0) - first);
+      renderer.finish();
+      t0 = std::chrono::steady_clock::now();
+      renderer.render_instanced_reference(inputs[k], offsets, camera.view(), camera.projection(aspect));
+      renderer.finish();
+      t1 = std::chrono::steady_clock::now();
+      if (f > 0) raw_s += std::chrono::duration<double>(t1 - t0).count(), raw_triangles += renderer.triangles_drawn();
+    }
+  }
+  const double crowd_rate = crowd_s > 0 ? double(crowd_triangles) / crowd_s : 0.0;
+  const double raw_rate = raw_s > 0 ? double(raw_triangles) / raw_s : 0.0;
+  nlohmann::json j;
+  j["gl_renderer"] = context->renderer();
+  j["width"] = o.width;
+  j["height"] = o.height;
+  j["crowd_triangles_per_second"] = crowd_rate;
+  j["raw_instanced_triangles_per_second"] = raw_rate;
+  j["ratio"] = raw_rate > 0 ? crowd_rate / raw_rate : 0.0;
+  j["crowd_ms_per_frame"] = 1000.0 * crowd_s / double(std::max<std::size_t>(std::min<std::size_t>(o.frames, 30) - 1, 1));
+  j["raw_ms_per_frame"] = 1000.0 * raw_s / double(std::max<std::size_t>(std::min<std::size_t>(o.frames, 30) - 1, 1));
+  return j;
+}
 
 int run_bench(const BenchOptions& o) {
   const int threads = thread_count(o.scene);
@@ -59,6 +125,16 @@ int run_bench(const BenchOptions& o) {
       systems.push_back({{"name", s.name}, {"mean_ms", s.mean_ms}, {"p95_ms", s.p95_ms}, {"min_ms", s.min_ms},
                          {"max_ms", s.max_ms}});
     j["systems"] = systems;
+    if (o.render) {
+      const nlohmann::json r = render_bench(*scene, o);
+      j["render"] = r;
+      std::printf("render pass (%s, %dx%d): crowd %.3g triangles/s (%.1f ms/frame), raw instanced %.3g triangles/s "
+                  "(%.1f ms/frame), ratio %.2f\n",
+                  r["gl_renderer"].get<std::string>().c_str(), o.width, o.height,
+                  r["crowd_triangles_per_second"].get<double>(), r["crowd_ms_per_frame"].get<double>(),
+                  r["raw_instanced_triangles_per_second"].get<double>(), r["raw_ms_per_frame"].get<double>(),
+                  r["ratio"].get<double>());
+    }
     if (!o.json.empty()) write_json_file(o.json, j);
     std::printf("strata bench: %zu walkers x %zu frames, level %s (%zu vertices each), %d threads: %.2f ms/frame, "
                 "%.0f walker-frames/s\n",
@@ -82,6 +158,10 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
   cmd->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(CLI::PositiveNumber);
   cmd->add_option("--json", o->json, "Write the results here");
+  cmd->add_flag("--render", o->render,
+                "Also time the crowd render pass (headless EGL) against raw instanced drawing of the same triangles");
+  cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(CLI::Range(1, 16384));
   cmd->callback([o, &exit_code] { exit_code = run_bench(*o); });
 }
 

@@ -200,6 +200,28 @@ void main() {
 }
 )";
 
+// The render benchmark's reference (SkeletonRenderer::render_instanced_reference): one mesh, static, drawn once
+// per instance moved by a per-instance offset: raw instancing, nothing streamed per frame.
+constexpr const char* kInstancedBodyVertexShader = R"(#version 450 core
+layout(location = 0) in float a_px;
+layout(location = 1) in float a_py;
+layout(location = 2) in float a_pz;
+layout(location = 3) in float a_nx;
+layout(location = 4) in float a_ny;
+layout(location = 5) in float a_nz;
+layout(location = 6) in vec3 a_offset;
+uniform mat4 u_view;
+uniform mat4 u_projection;
+out vec3 v_normal;
+out vec3 v_position;
+void main() {
+  vec4 view_position = u_view * vec4(vec3(a_px, a_py, a_pz) + a_offset, 1.0);
+  v_position = view_position.xyz;
+  v_normal = mat3(u_view) * vec3(a_nx, a_ny, a_nz);
+  gl_Position = u_projection * view_position;
+}
+)";
+
 // The ground quad is generated from gl_VertexID (no vertex buffer); the core profile still needs a bound VAO.
 constexpr const char* kGroundVertexShader = R"(#version 450 core
 uniform mat4 u_view;
@@ -380,6 +402,9 @@ struct SkeletonRenderer::Impl {
   std::vector<const void*> body_offsets;
   std::vector<GLint> body_base_vertices;
   std::size_t triangles_drawn = 0;
+  // The instanced reference: its own program, VAO, static mesh buffers and instance buffer.
+  GLuint instanced_program = 0, instanced_vao = 0, instanced_mesh = 0, instanced_offsets = 0;
+  BodySlot instanced_slot{};
 
   static bool slot_matches(const BodySlot& slot, const BodyDrawInput& b) {
     return slot.topology == b.triangles.data() && slot.index_count == b.triangles.size() &&
@@ -433,6 +458,24 @@ struct SkeletonRenderer::Impl {
     triangles_drawn += b.walker_count * (b.triangles.size() / 3);
   }
 
+  // Every piece of state a frame depends on (the caller, or a GUI, may have changed any of it), then the clears.
+  void begin_frame() {
+    glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
+    glViewport(0, 0, width, height);
+    glDisable(GL_SCISSOR_TEST);
+    glDisable(GL_BLEND);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glDepthMask(GL_TRUE);  // clears honour the write mask
+    glClearNamedFramebufferfv(msaa_fbo, GL_COLOR, 0, glm::value_ptr(options.clear_color));
+    const GLfloat far_depth = 1.0f;
+    glClearNamedFramebufferfv(msaa_fbo, GL_DEPTH, 0, &far_depth);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    glFrontFace(GL_CCW);
+  }
+
   void create_targets() {
     glCreateRenderbuffers(1, &msaa_color);
     glCreateRenderbuffers(1, &msaa_depth);
@@ -476,6 +519,12 @@ struct SkeletonRenderer::Impl {
     destroy_mesh(joint);
     glDeleteVertexArrays(1, &body_vao);
     glDeleteBuffers(1, &body_components);
+    const GLuint instanced_buffers[] = {instanced_mesh, instanced_offsets, instanced_slot.indices};
+    glDeleteBuffers(3, instanced_buffers);
+    glDeleteVertexArrays(1, &instanced_vao);
+    glDeleteProgram(instanced_program);
+    instanced_program = instanced_vao = instanced_mesh = instanced_offsets = 0;
+    instanced_slot = BodySlot{};
     for (BodySlot& slot : body_slots) {
       glDeleteBuffers(1, &slot.indices);
       slot = BodySlot{};
@@ -574,6 +623,7 @@ SkeletonRenderer::SkeletonRenderer(int width, int height, SkeletonRenderOptions 
     r.bone = upload_mesh(make_bone_mesh());
     r.joint = upload_mesh(make_sphere_mesh());
     r.body_program = link_program(kBodyVertexShader, kMeshFragmentShader, "body");
+    r.instanced_program = link_program(kInstancedBodyVertexShader, kMeshFragmentShader, "instanced body");
     r.create_body_vao();
     glCreateVertexArrays(1, &r.ground_vao);
     r.create_targets();
@@ -640,21 +690,7 @@ void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& v
   r.build_instances(input);
   const SkeletonRenderOptions& o = r.options;
 
-  // Set every piece of state the frame depends on: the caller (or a GUI) may have changed any of it.
-  glBindFramebuffer(GL_FRAMEBUFFER, r.msaa_fbo);
-  glViewport(0, 0, r.width, r.height);
-  glDisable(GL_SCISSOR_TEST);
-  glDisable(GL_BLEND);
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glDepthMask(GL_TRUE);  // clears honour the write mask
-  glClearNamedFramebufferfv(r.msaa_fbo, GL_COLOR, 0, glm::value_ptr(o.clear_color));
-  const GLfloat far_depth = 1.0f;
-  glClearNamedFramebufferfv(r.msaa_fbo, GL_DEPTH, 0, &far_depth);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glEnable(GL_CULL_FACE);
-  glCullFace(GL_BACK);
-  glFrontFace(GL_CCW);
+  r.begin_frame();
 
   if (o.draw_ground) {
     glm::vec2 center;
@@ -722,5 +758,65 @@ void SkeletonRenderer::blit_to_default_framebuffer(int width, int height) const 
   glBlitNamedFramebuffer(r.resolve_fbo, 0, 0, 0, r.width, r.height, 0, 0, width, height, GL_COLOR_BUFFER_BIT,
                          same_size ? GL_NEAREST : GL_LINEAR);
 }
+
+void SkeletonRenderer::render_instanced_reference(const BodyDrawInput& mesh, std::span<const glm::vec3> offsets,
+                                                  const glm::mat4& view, const glm::mat4& projection) {
+  Impl& r = *impl_;
+  if (!mesh.px || mesh.vertex_count == 0 || mesh.triangles.size() % 3 != 0)
+    throw std::invalid_argument("render_instanced_reference: no mesh");
+  if (r.instanced_vao == 0) {
+    glCreateVertexArrays(1, &r.instanced_vao);
+    glCreateBuffers(1, &r.instanced_mesh);
+    glCreateBuffers(1, &r.instanced_offsets);
+    glCreateBuffers(1, &r.instanced_slot.indices);
+    for (GLuint a = 0; a < 6; ++a) {
+      glEnableVertexArrayAttrib(r.instanced_vao, a);
+      glVertexArrayAttribFormat(r.instanced_vao, a, 1, GL_FLOAT, GL_FALSE, 0);
+      glVertexArrayAttribBinding(r.instanced_vao, a, a);
+    }
+    glEnableVertexArrayAttrib(r.instanced_vao, 6);
+    glVertexArrayAttribFormat(r.instanced_vao, 6, 3, GL_FLOAT, GL_FALSE, 0);
+    glVertexArrayAttribBinding(r.instanced_vao, 6, 6);
+    glVertexArrayBindingDivisor(r.instanced_vao, 6, 1);
+    glVertexArrayElementBuffer(r.instanced_vao, r.instanced_slot.indices);
+  }
+  // The mesh (walker 0 of `mesh`) and its indices go up once, like any static instanced model.
+  if (!Impl::slot_matches(r.instanced_slot, mesh)) {
+    for (std::uint32_t index : mesh.triangles)
+      if (index >= mesh.vertex_count) throw std::invalid_argument("render_instanced_reference: index out of range");
+    r.optimized.resize(mesh.triangles.size());
+    meshopt_optimizeVertexCache(r.optimized.data(), mesh.triangles.data(), mesh.triangles.size(), mesh.vertex_count);
+    glNamedBufferData(r.instanced_slot.indices, static_cast<GLsizeiptr>(r.optimized.size() * sizeof(std::uint32_t)),
+                      r.optimized.data(), GL_STATIC_DRAW);
+    const GLsizeiptr bytes = static_cast<GLsizeiptr>(mesh.vertex_count * sizeof(float));
+    glNamedBufferData(r.instanced_mesh, 6 * bytes, nullptr, GL_STATIC_DRAW);
+    const float* arrays[6] = {mesh.px, mesh.py, mesh.pz, mesh.nx, mesh.ny, mesh.nz};
+    for (GLuint a = 0; a < 6; ++a) {
+      glNamedBufferSubData(r.instanced_mesh, a * bytes, bytes, arrays[a]);
+      glVertexArrayVertexBuffer(r.instanced_vao, a, r.instanced_mesh, a * bytes, sizeof(float));
+    }
+    r.instanced_slot.topology = mesh.triangles.data();
+    r.instanced_slot.index_count = mesh.triangles.size();
+    r.instanced_slot.vertex_count = mesh.vertex_count;
+  }
+  glNamedBufferData(r.instanced_offsets, static_cast<GLsizeiptr>(offsets.size() * sizeof(glm::vec3)), offsets.data(),
+                    GL_STREAM_DRAW);
+  glVertexArrayVertexBuffer(r.instanced_vao, 6, r.instanced_offsets, 0, sizeof(glm::vec3));
+  r.begin_frame();
+  const GLuint p = r.instanced_program;
+  glUseProgram(p);
+  glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));
+  glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));
+  glProgramUniform3fv(p, glGetUniformLocation(p, "u_color"), 1, glm::value_ptr(r.options.skin_color));
+  glBindVertexArray(r.instanced_vao);
+  glDrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(mesh.triangles.size()), GL_UNSIGNED_INT, nullptr,
+                          static_cast<GLsizei>(offsets.size()));
+  glBindVertexArray(0);
+  r.triangles_drawn = offsets.size() * (mesh.triangles.size() / 3);
+  glBlitNamedFramebuffer(r.msaa_fbo, r.resolve_fbo, 0, 0, r.width, r.height, 0, 0, r.width, r.height,
+                         GL_COLOR_BUFFER_BIT, GL_NEAREST);
+}
+
+void SkeletonRenderer::finish() const { glFinish(); }
 
 }  // namespace strata

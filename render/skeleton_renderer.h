@@ -78,6 +78,13 @@ class SkeletonRenderer {
               std::span<const BodyDrawInput> body_levels);
   // Body triangles submitted by the last render() (walkers x triangles per level).
   std::size_t triangles_drawn() const;
+  // The render benchmark's reference (`strata bench --render`): walker 0 of `mesh` uploaded once as a static
+  // mesh and drawn offsets.size() times in one glDrawElementsInstanced, each copy moved by its offset, into the
+  // same target with the same material: raw instancing of the same triangles, with nothing streamed.
+  void render_instanced_reference(const BodyDrawInput& mesh, std::span<const glm::vec3> offsets, const glm::mat4& view,
+                                  const glm::mat4& projection);
+  // Waits until the GL has finished every command (for timing).
+  void finish() const;
   // RGBA8 pixels, rows top to bottom (image order), width*height*4 bytes.
   void read_rgba(std::vector<std::uint8_t>& out) const;
   // Copies the FBO to framebuffer 0 (a window), scaled to the given size.

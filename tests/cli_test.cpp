@@ -271,6 +271,20 @@ TEST(StrataBench, TimesTheFullSimulationWithoutRendering) {
   EXPECT_FALSE(systems.count("render")) << "bench renders nothing";
 }
 
+TEST(StrataBench, RenderPassAgainstRawInstancing) {
+  const fs::path json = scratch("bench_render.json");
+  Result r = run("bench --walkers 6 --frames 4 --level auto --render --width 160 --height 120 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_TRUE(j.contains("render")) << j.dump();
+  const auto& render = j["render"];
+  EXPECT_GT(render["crowd_triangles_per_second"].get<double>(), 0.0);
+  EXPECT_GT(render["raw_instanced_triangles_per_second"].get<double>(), 0.0);
+  EXPECT_GT(render["ratio"].get<double>(), 0.0);
+  EXPECT_EQ(j["level_name"], "auto");
+}
+
 TEST(StrataReport, GaitWritesTheMeasuredTargets) {
   fs::path json = scratch("gait.json");
   Result r = run("report gait --walkers 4 --seconds 6 --json " + json.string());
