@@ -13,6 +13,7 @@ void add_crowd_command(CLI::App& app, int& exit_code);
 void add_view_command(CLI::App& app, int& exit_code);
 void add_report_command(CLI::App& app, int& exit_code);
 void add_bench_command(CLI::App& app, int& exit_code);
+void add_soak_command(CLI::App& app, int& exit_code);   // apps/cmd_soak.cpp
 void add_skin_report(CLI::App& report, int& exit_code);  // `strata report skin`, apps/report_skin.cpp
 
 }  // namespace strata::cli
