@@ -637,6 +637,14 @@ class GltfReader {
     std::sort(times.begin(), times.end());
     times.erase(std::unique(times.begin(), times.end(), [](float a, float b) { return b - a < 1e-6f; }), times.end());
 
+    // Baking evaluates every node at every key time. A hostile file can pair 10^5 key times with 10^5 nodes from
+    // well under a megabyte; refuse what no body animation needs rather than hang (CesiumMan: 48 x 22).
+    constexpr double kBakeBudget = 5e7;
+    if (static_cast<double>(times.size()) * static_cast<double>(model_.nodes.size() + skeleton_.joint_count()) > kBakeBudget)
+      fail("animation '" + (anim.name.empty() ? std::string("animation_0") : anim.name) + "'",
+           std::to_string(times.size()) + " key times x " + std::to_string(model_.nodes.size()) +
+               " nodes is too large to bake");
+
     // An animated node defined by `matrix` (not allowed by glTF, but seen) is decomposed once into TRS.
     std::vector<Trs> base = default_trs_;
     for (const Channel& ch : channels)
