@@ -117,5 +117,23 @@ TEST(FuzzRegressions, GltfNodeNamingAMissingMesh) {
   }
 }
 
+TEST(FuzzRegressions, JsonNumberOverflowIsALoadError) {
+  // nlohmann throws out_of_range, not parse_error, for a number beyond double: both loaders' JSON must say so in
+  // a LoadError naming the file.
+  const std::string bytes = read_text(kDir / "binding" / "number_overflow.bin");
+  try {
+    (void)load_binding_tables(bytes, "", "number_overflow.bin");
+    ADD_FAILURE() << "loaded";
+  } catch (const LoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("number_overflow.bin: invalid JSON"), std::string::npos) << e.what();
+  }
+  try {
+    (void)load_makehuman_text("v 0 0 0\nv 1 0 0\nv 0 1 0\ng body\nf 1 2 3\n", "{\"bones\": 1e400}", "{}", "mh");
+    ADD_FAILURE() << "loaded";
+  } catch (const LoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("mh/default.mhskel: invalid JSON"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace strata
