@@ -13,6 +13,7 @@ void add_crowd_command(CLI::App& app, int& exit_code);
 void add_view_command(CLI::App& app, int& exit_code);
 void add_report_command(CLI::App& app, int& exit_code);
 void add_bench_command(CLI::App& app, int& exit_code);
+void add_soak_command(CLI::App& app, int& exit_code);   // apps/cmd_soak.cpp
 void add_export_command(CLI::App& app, int& exit_code);   // `strata export`, apps/cmd_export.cpp
 void add_skin_report(CLI::App& report, int& exit_code);    // `strata report skin`, apps/report_skin.cpp
 void add_muscle_report(CLI::App& report, int& exit_code);  // `strata report muscle`, apps/report_muscle.cpp

@@ -1,17 +1,16 @@
 #pragma once
-// Writing the JSON every command and report produces: pretty-printed, and a failure names the path.
+// Writing the JSON every command and report produces: pretty-printed, written to a temporary sibling and renamed
+// into place (io/atomic_file.h), and a failure names the path.
 #include <filesystem>
-#include <fstream>
-#include <stdexcept>
 
 #include <nlohmann/json.hpp>
+
+#include "io/atomic_file.h"
 
 namespace strata::cli {
 
 inline void write_json_file(const std::filesystem::path& path, const nlohmann::json& value) {
-  std::ofstream out(path);
-  out << value.dump(2) << "\n";
-  if (!out) throw std::runtime_error("cannot write " + path.string());
+  write_file_atomically(path, value.dump(2) + "\n");
 }
 
 }  // namespace strata::cli

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   strata::cli::add_report_command(app, exit_code);
   strata::cli::add_bench_command(app, exit_code);
   strata::cli::add_export_command(app, exit_code);
+  strata::cli::add_soak_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

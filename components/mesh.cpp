@@ -61,6 +61,11 @@ void validate_mesh(const Mesh& mesh, std::string_view source) {
       throw LoadError(where + ": " + what + " has " + std::to_string(size) + " entries for " + std::to_string(n) +
                       " vertices");
   };
+  for (std::size_t v = 0; v < mesh.normals.size(); ++v) {
+    const glm::vec3& nrm = mesh.normals[v];
+    if (!std::isfinite(nrm.x) || !std::isfinite(nrm.y) || !std::isfinite(nrm.z))
+      throw LoadError(where + ": vertex " + std::to_string(v) + " has a non-finite normal");
+  }
   check_length(mesh.normals.size(), "normals");
   check_length(mesh.uvs.size(), "uvs");
   check_length(mesh.part.size(), "part ids");

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <unordered_set>
 
 #include <glm/gtc/quaternion.hpp>
 
@@ -82,6 +83,11 @@ class Parser {
     if (!at_end() && token_ != 0)
       fail(time_value.line, "unexpected '" + std::string(lines_[line_].tokens[token_]) + "' after the frame time");
 
+    // Checked before anything is sized by it: a hostile "Frames: 1e30" must not allocate (or overflow size_t).
+    const std::size_t lines_left = lines_.size() - line_;
+    if (frames > static_cast<float>(lines_left))
+      fail(last_line(), "'Frames: " + std::string(frames_value.text) + "' but " + std::to_string(lines_left) +
+                            " motion lines");
     motion.frame_count = static_cast<std::size_t>(frames);
     for (const BvhJoint& j : motion.joints) motion.channel_count += j.channels.size();
     parse_frames(motion, frames_value.line);
@@ -170,12 +176,15 @@ class Parser {
   }
 
   // Parses the block of one joint (its name comes next), appending it and its descendants to motion.joints.
-  void parse_joint(BvhMotion& motion, std::int32_t parent, std::size_t keyword_line) {
+  void parse_joint(BvhMotion& motion, std::int32_t parent, std::size_t keyword_line, int depth = 0) {
+    // Recursive descent, one level per JOINT: a hostile file nesting thousands deep would overflow the stack
+    // (found by fuzzing). Human skeletons nest a few dozen levels.
+    constexpr int kMaxDepth = 256;
+    if (depth > kMaxDepth) fail(keyword_line, "joints nested deeper than " + std::to_string(kMaxDepth) + " levels");
     BvhJoint joint;
     joint.name = rest_of_line(keyword_line);
     joint.parent = parent;
-    for (const BvhJoint& other : motion.joints)
-      if (other.name == joint.name) fail(keyword_line, "duplicate joint name '" + joint.name + "'");
+    if (!names_.insert(joint.name).second) fail(keyword_line, "duplicate joint name '" + joint.name + "'");
     expect_open("'" + joint.name + "'");
     joint.offset = parse_offset();
 
@@ -204,7 +213,7 @@ class Parser {
       const Token t = next("'}'");
       if (t.text == "}") return;
       if (t.text == "JOINT") {
-        parse_joint(motion, index, t.line);
+        parse_joint(motion, index, t.line, depth + 1);
       } else if (t.text == "End") {
         const Token site = next("Site");
         if (site.text != "Site") fail(site.line, "expected 'End Site', found 'End " + std::string(site.text) + "'");
@@ -251,6 +260,7 @@ class Parser {
 
   std::string_view source_;
   std::vector<Line> lines_;
+  std::unordered_set<std::string> names_;  // joint names seen, for the duplicate check
   std::size_t line_ = 0;   // cursor: line index into lines_
   std::size_t token_ = 0;  //         token index within it
 };

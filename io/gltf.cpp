@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -38,9 +39,58 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
   return true;
 }
 
+// In-memory loads have no directory: every attempt to reach the file system (an external buffer URI) fails.
+bool no_file_exists(const std::string&, void*) { return false; }
+std::string no_expand(const std::string& path, void*) { return path; }
+bool no_read(std::vector<unsigned char>*, std::string* err, const std::string& path, void*) {
+  if (err) *err += "external file '" + path + "' cannot be read when loading from memory. ";
+  return false;
+}
+bool no_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err += "writing is not supported. ";
+  return false;
+}
+
+std::uint32_t read_u32(const std::uint8_t* p) {
+  std::uint32_t v;
+  std::memcpy(&v, p, 4);  // GLB is little-endian, as is every platform Strata builds for
+  return v;
+}
+
+// The GLB container (12-byte header, then 8-byte-headed chunks: JSON first, an optional BIN) checked before
+// tinygltf sees it, so a truncated or inconsistent file is refused with the byte offset at fault rather than
+// tinygltf's generic message (or, in older releases, its out-of-bounds read).
+void check_glb_framing(std::span<const std::uint8_t> b, const std::string& name) {
+  auto fail = [&](std::size_t offset, const std::string& reason) {
+    throw LoadError(name + ": byte " + std::to_string(offset) + ": " + reason);
+  };
+  const std::size_t size = b.size();
+  if (size < 12) fail(size, "truncated GLB: " + std::to_string(size) + " bytes, the header alone is 12");
+  if (const std::uint32_t version = read_u32(b.data() + 4); version != 2)
+    fail(4, "GLB version " + std::to_string(version) + ", expected 2");
+  if (const std::uint32_t length = read_u32(b.data() + 8); length != size)
+    fail(8, "GLB header gives a length of " + std::to_string(length) + " bytes but the file has " +
+                std::to_string(size) + (length > size ? " (truncated)" : ""));
+  std::size_t offset = 12;
+  for (int chunk = 0; offset < size; ++chunk) {
+    if (size - offset < 8)
+      fail(offset, "truncated GLB chunk header: " + std::to_string(size - offset) + " bytes left, need 8");
+    const std::uint32_t length = read_u32(b.data() + offset);
+    const std::uint32_t type = read_u32(b.data() + offset + 4);
+    if (chunk == 0 && type != 0x4E4F534Au) fail(offset + 4, "the first GLB chunk is not JSON");
+    if (length > size - offset - 8)
+      fail(offset, "GLB chunk " + std::to_string(chunk) + " of " + std::to_string(length) + " bytes runs past the end of the file (" +
+                       std::to_string(size - offset - 8) + " bytes left; truncated)");
+    offset += 8 + length;
+  }
+  if (offset == 12) fail(12, "GLB has no JSON chunk");
+}
+
 class GltfReader {
  public:
   explicit GltfReader(const std::filesystem::path& path) : path_(path), name_(path.string()) {}
+  GltfReader(std::span<const std::uint8_t> bytes, std::string_view name)
+      : path_(std::string(name)), name_(name), memory_(bytes), in_memory_(true) {}
 
   ImportedBody read() {
     load_model();
@@ -48,6 +98,8 @@ class GltfReader {
     default_globals_ = globals_at_default();
     const int node = find_skinned_node();
     const tinygltf::Node& skinned = model_.nodes[node];
+    if (static_cast<std::size_t>(skinned.mesh) >= model_.meshes.size())  // found by fuzzing
+      fail("node " + std::to_string(node), "mesh " + std::to_string(skinned.mesh) + " does not exist");
     read_skin(skinned.skin);
     build_skeleton();
     ImportedBody body;
@@ -64,17 +116,42 @@ class GltfReader {
   }
 
   void load_model() {
+    if (in_memory_) return load_model_from_memory();
     std::ifstream in(path_, std::ios::binary);
     if (!in) throw LoadError(name_ + ": cannot open file");
     char magic[4] = {};
     in.read(magic, 4);
     const bool binary = in.gcount() == 4 && std::memcmp(magic, "glTF", 4) == 0;
     in.close();
+    if (binary) {
+      std::ifstream whole(path_, std::ios::binary);
+      const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(whole)), std::istreambuf_iterator<char>());
+      check_glb_framing(bytes, name_);
+    }
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
     std::string err, warn;
     const bool ok = binary ? loader.LoadBinaryFromFile(&model_, &err, &warn, path_.string())
                            : loader.LoadASCIIFromFile(&model_, &err, &warn, path_.string());
+    if (!ok) {
+      std::replace(err.begin(), err.end(), '\n', ' ');
+      throw LoadError(name_ + ": not a readable glTF 2.0 file: " + (err.empty() ? "unknown error" : err));
+    }
+  }
+
+  void load_model_from_memory() {
+    const bool binary = memory_.size() >= 4 && std::memcmp(memory_.data(), "glTF", 4) == 0;
+    if (binary) check_glb_framing(memory_, name_);
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(skip_image, nullptr);
+    loader.SetFsCallbacks({no_file_exists, no_expand, no_read, no_write, nullptr});
+    std::string err, warn;
+    // tinygltf takes an unsigned int size; larger inputs are not glTF files we can read anyway.
+    if (memory_.size() > 0x7fffffffu) throw LoadError(name_ + ": not a readable glTF 2.0 file: larger than 2 GiB");
+    const auto size = static_cast<unsigned int>(memory_.size());
+    const bool ok = binary ? loader.LoadBinaryFromMemory(&model_, &err, &warn, memory_.data(), size, "")
+                           : loader.LoadASCIIFromString(&model_, &err, &warn,
+                                                        reinterpret_cast<const char*>(memory_.data()), size, "");
     if (!ok) {
       std::replace(err.begin(), err.end(), '\n', ' ');
       throw LoadError(name_ + ": not a readable glTF 2.0 file: " + (err.empty() ? "unknown error" : err));
@@ -111,10 +188,20 @@ class GltfReader {
     if (v.components <= 0 || component_size <= 0) fail(where, "unknown type or component type");
     const std::size_t element = static_cast<std::size_t>(v.components) * component_size;
     v.stride = bv.byteStride ? bv.byteStride : element;
-    const std::size_t needed = a.count == 0 ? 0 : a.byteOffset + (a.count - 1) * v.stride + element;
-    if (bv.byteOffset + bv.byteLength > buffer.size() || needed > bv.byteLength)
-      fail(where, "reads " + std::to_string(needed) + " bytes of a " + std::to_string(bv.byteLength) +
-                      "-byte buffer view (out of range)");
+    // Every term is checked against the sizes before it is multiplied or added: a hostile count or offset must
+    // not wrap size_t into a small, "valid" range.
+    if (bv.byteOffset > buffer.size() || bv.byteLength > buffer.size() - bv.byteOffset)
+      fail(where, "buffer view " + std::to_string(a.bufferView) + " (" + std::to_string(bv.byteLength) +
+                      " bytes at offset " + std::to_string(bv.byteOffset) + ") lies outside its " +
+                      std::to_string(buffer.size()) + "-byte buffer");
+    const std::size_t limit = bv.byteLength;
+    const bool fits = a.count == 0 ||
+                      (a.byteOffset <= limit && element <= limit - a.byteOffset &&
+                       (a.count - 1) <= (limit - a.byteOffset - element) / v.stride);
+    if (!fits)
+      fail(where, std::to_string(a.count) + " elements of " + std::to_string(element) + " bytes (stride " +
+                      std::to_string(v.stride) + ", offset " + std::to_string(a.byteOffset) + ") read past a " +
+                      std::to_string(bv.byteLength) + "-byte buffer view (out of range)");
     v.data = buffer.data() + bv.byteOffset + a.byteOffset;
     return v;
   }
@@ -209,11 +296,18 @@ class GltfReader {
                                                 static_cast<float>(node.rotation[1]), static_cast<float>(node.rotation[2])));
       if (node.scale.size() == 3) trs.scale = glm::vec3(node.scale[0], node.scale[1], node.scale[2]);
     }
-    // A cycle would make a node its own ancestor.
+    // A cycle would make a node its own ancestor. Each node's parent chain is walked once (state: 0 unseen, 1 on
+    // the current walk, 2 known acyclic), so a deep chain costs O(n), not O(n * depth).
+    std::vector<char> state(n, 0);
+    std::vector<int> walk;
     for (std::size_t i = 0; i < n; ++i) {
-      std::size_t steps = 0;
-      for (int p = parent_[i]; p >= 0; p = parent_[p])
-        if (++steps > n) fail("node " + std::to_string(i), "the node tree has a cycle");
+      walk.clear();
+      for (int p = static_cast<int>(i); p >= 0 && state[p] != 2; p = parent_[p]) {
+        if (state[p] == 1) fail("node " + std::to_string(p), "the node tree has a cycle");
+        state[p] = 1;
+        walk.push_back(p);
+      }
+      for (int p : walk) state[p] = 2;
     }
   }
 
@@ -222,14 +316,17 @@ class GltfReader {
     const std::size_t n = locals.size();
     std::vector<glm::mat4> out(n);
     std::vector<char> done(n, 0);
-    std::function<const glm::mat4&(int)> get = [&](int i) -> const glm::mat4& {
-      if (!done[i]) {
-        out[i] = parent_[i] >= 0 ? get(parent_[i]) * locals[i] : locals[i];
-        done[i] = 1;
+    // Iterative: a recursive walk up the parents overflows the stack on a deep (hostile) node chain.
+    std::vector<int> chain;
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int p = static_cast<int>(i); p >= 0 && !done[p]; p = parent_[p]) chain.push_back(p);
+      for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+        const int k = *it;
+        out[k] = parent_[k] >= 0 ? out[parent_[k]] * locals[k] : locals[k];
+        done[k] = 1;
       }
-      return out[i];
-    };
-    for (std::size_t i = 0; i < n; ++i) get(static_cast<int>(i));
+      chain.clear();
+    }
     return out;
   }
 
@@ -245,11 +342,17 @@ class GltfReader {
     std::vector<int> roots;
     const int scene = model_.defaultScene >= 0 ? model_.defaultScene : 0;
     if (static_cast<std::size_t>(scene) < model_.scenes.size()) roots = model_.scenes[scene].nodes;
-    std::function<int(int)> search = [&](int i) {
-      if (i < 0 || static_cast<std::size_t>(i) >= model_.nodes.size()) return -1;
-      if (skinned(i)) return i;
-      for (int c : model_.nodes[i].children)
-        if (const int found = search(c); found >= 0) return found;
+    // Depth-first, children in order, with an explicit stack (no recursion depth for a hostile tree to exhaust).
+    auto search = [&](int root) {
+      std::vector<int> stack{root};
+      while (!stack.empty()) {
+        const int i = stack.back();
+        stack.pop_back();
+        if (i < 0 || static_cast<std::size_t>(i) >= model_.nodes.size()) continue;
+        if (skinned(i)) return i;
+        const std::vector<int>& children = model_.nodes[i].children;
+        stack.insert(stack.end(), children.rbegin(), children.rend());
+      }
       return -1;
     };
     for (int r : roots)
@@ -320,14 +423,21 @@ class GltfReader {
       return static_cast<int>(s.joint_names.size() - 1);
     };
     if (synthetic_root) add("skin_root", -1, glm::vec3(0.0f), -1);
-    std::function<void(int, int)> visit = [&](int k, int parent) {
+    // Depth-first preorder (parents first) with an explicit stack: a recursive visit overflows on a deep chain.
+    std::vector<std::pair<int, int>> stack;  // (skin joint, skeleton parent)
+    for (auto r = roots.rbegin(); r != roots.rend(); ++r) stack.emplace_back(*r, synthetic_root ? 0 : -1);
+    while (!stack.empty()) {
+      const auto [k, parent] = stack.back();
+      stack.pop_back();
       const tinygltf::Node& node = model_.nodes[skin_joints_[k]];
       const std::string name = node.name.empty() ? "joint_" + std::to_string(k) : node.name;
-      const int j = add(name, parent, glm::vec3(default_globals_[skin_joints_[k]][3]), k);
+      const glm::vec3 center(default_globals_[skin_joints_[k]][3]);
+      if (!std::isfinite(center.x) || !std::isfinite(center.y) || !std::isfinite(center.z))
+        fail("node " + std::to_string(skin_joints_[k]), "its default-pose position is not finite");
+      const int j = add(name, parent, center, k);
       joint_of_skin_[k] = j;
-      for (int c : children[k]) visit(c, j);
-    };
-    for (int r : roots) visit(r, synthetic_root ? 0 : -1);
+      for (auto c = children[k].rbegin(); c != children[k].rend(); ++c) stack.emplace_back(*c, j);
+    }
   }
 
   void read_mesh(const tinygltf::Mesh& gmesh, ImportedBody& body) {
@@ -527,6 +637,14 @@ class GltfReader {
     std::sort(times.begin(), times.end());
     times.erase(std::unique(times.begin(), times.end(), [](float a, float b) { return b - a < 1e-6f; }), times.end());
 
+    // Baking evaluates every node at every key time. A hostile file can pair 10^5 key times with 10^5 nodes from
+    // well under a megabyte; refuse what no body animation needs rather than hang (CesiumMan: 48 x 22).
+    constexpr double kBakeBudget = 5e7;
+    if (static_cast<double>(times.size()) * static_cast<double>(model_.nodes.size() + skeleton_.joint_count()) > kBakeBudget)
+      fail("animation '" + (anim.name.empty() ? std::string("animation_0") : anim.name) + "'",
+           std::to_string(times.size()) + " key times x " + std::to_string(model_.nodes.size()) +
+               " nodes is too large to bake");
+
     // An animated node defined by `matrix` (not allowed by glTF, but seen) is decomposed once into TRS.
     std::vector<Trs> base = default_trs_;
     for (const Channel& ch : channels)
@@ -592,6 +710,20 @@ class GltfReader {
         }
       }
     }
+    // A singular node transform (a zero scale) has no inverse: the baked keys would be NaN. No NaN leaves a loader.
+    auto finite = [](auto v) {
+      for (int c = 0; c < v.length(); ++c)
+        if (!std::isfinite(v[c])) return false;
+      return true;
+    };
+    for (const RotationTrack& track : clip.rotations)
+      for (std::size_t k = 0; k < track.values.size(); ++k)
+        if (!finite(track.values[k]))
+          fail("animation '" + clip.name + "'", "joint " + std::to_string(track.joint) + " at t=" +
+                                                    std::to_string(track.times[k]) +
+                                                    " s bakes to a non-finite rotation (singular node transform)");
+    for (const glm::vec3& t : clip.translations[0].values)
+      if (!finite(t)) fail("animation '" + clip.name + "'", "the root bakes to a non-finite translation");
     body.warnings.push_back(name_ + ": animation '" + clip.name + "' baked at " + std::to_string(times.size()) +
                             " key times; largest non-root translation residual " + std::to_string(max_residual) +
                             " m");
@@ -600,6 +732,8 @@ class GltfReader {
 
   std::filesystem::path path_;
   std::string name_;
+  std::span<const std::uint8_t> memory_;
+  bool in_memory_ = false;
   tinygltf::Model model_;
   std::vector<int> parent_;
   std::vector<Trs> default_trs_;
@@ -616,5 +750,9 @@ class GltfReader {
 }  // namespace
 
 ImportedBody load_gltf(const std::filesystem::path& path) { return GltfReader(path).read(); }
+
+ImportedBody load_gltf_memory(std::span<const std::uint8_t> bytes, std::string_view source_name) {
+  return GltfReader(bytes, source_name).read();
+}
 
 }  // namespace strata

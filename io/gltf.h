@@ -25,12 +25,19 @@
 //     non-root joint cannot be expressed by a rotation about c_j and is lost. The largest such residual over all
 //     keys and joints is reported in ImportedBody::warnings. Between keys, Strata slerps the baked global-frame
 //     rotations, which differs slightly from slerping the glTF's local ones.
+#include <cstdint>
 #include <filesystem>
+#include <span>
+#include <string_view>
 
 #include "io/obj.h"
 
 namespace strata {
 
 ImportedBody load_gltf(const std::filesystem::path& path);
+// The same from bytes in memory (a GLB, or glTF JSON whose buffers are embedded as data: URIs; external files are
+// refused, since there is no directory to resolve them against). `source_name` is used in error messages and
+// names the skeleton.
+ImportedBody load_gltf_memory(std::span<const std::uint8_t> bytes, std::string_view source_name);
 
 }  // namespace strata

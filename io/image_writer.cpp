@@ -1,10 +1,14 @@
 #include "io/image_writer.h"
 
+#include "io/atomic_file.h"
+
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <vector>
 
 namespace strata {
 
@@ -30,21 +34,29 @@ void write_image(const std::filesystem::path& path, int width, int height, int c
   if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
     fail(path, "directory '" + parent.string() + "' does not exist");
 
+  // Encoded into memory, then written through write_file_atomically (io/atomic_file.h): a temporary sibling
+  // renamed into place only when complete. Letting OpenImageIO write the file itself was rejected: its PNG writer
+  // ignores a failing write (a full disk, a file-size limit) and reports success over a truncated frame.
   auto out = OIIO::ImageOutput::create(path.string());
   if (!out) fail(path, "no image format for this file name (" + OIIO::geterror() + ")");
+  if (!out->supports("ioproxy")) fail(path, "the image format cannot be encoded in memory");
+  std::vector<unsigned char> encoded;
+  OIIO::Filesystem::IOVecOutput memory(encoded);
+  OIIO::Filesystem::IOProxy* proxy = &memory;
 
   OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
   // Level 1 instead of the default 6: about 3x faster to encode for a modest size cost (notes, section 1).
   spec.attribute("png:compressionLevel", 1);
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
   if (!out->open(path.string(), spec)) fail(path, out->geterror());
   const bool written = out->write_image(OIIO::TypeDesc::UINT8, pixels.data());
   const std::string write_error = written ? std::string{} : out->geterror();
   const bool closed = out->close();
-  if (!written || !closed) {
-    const std::string reason = written ? out->geterror() : write_error;
-    // A truncated image left behind looks like a valid frame to the next tool in the pipeline.
-    std::filesystem::remove(path, ec);
-    fail(path, reason);
+  if (!written || !closed) fail(path, written ? out->geterror() : write_error);
+  try {
+    write_file_atomically(path, {reinterpret_cast<const char*>(encoded.data()), encoded.size()});
+  } catch (const std::exception& e) {
+    fail(path, e.what());
   }
 }
 

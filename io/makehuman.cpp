@@ -6,6 +6,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -91,37 +92,65 @@ const std::vector<std::pair<std::string, std::string>>& joint_sources() {
   throw LoadError(file.string() + ": " + message);
 }
 
-nlohmann::json read_json(const std::filesystem::path& file) {
+std::string read_file(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) fail(file, "cannot open file");
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+nlohmann::json parse_json(std::string_view text, const std::filesystem::path& file) {
   try {
-    return nlohmann::json::parse(in);
+    return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     fail(file, std::string("invalid JSON: ") + e.what());
   }
+}
+
+// A JSON value for an error message: short, and without serialising a (hostile, deeply nested) value whole, which
+// recurses once per nesting level.
+std::string describe(const nlohmann::json& value) {
+  if (value.is_primitive()) {
+    std::string text = value.dump();
+    if (text.size() > 40) text = text.substr(0, 37) + "...";
+    return text;
+  }
+  return std::string("a JSON ") + value.type_name();
 }
 
 // Bone names parents-first (the file lists them alphabetically); throws on a missing parent or a cycle.
 std::vector<std::string> sort_bones(const nlohmann::json& bones, const std::filesystem::path& file) {
   std::unordered_map<std::string, std::string> parent;
   for (const auto& [name, bone] : bones.items()) {
+    if (!bone.is_object()) fail(file, "bone '" + name + "': expected an object");
     const auto p = bone.find("parent");
+    if (p != bone.end() && !p->is_null() && !p->is_string())
+      fail(file, "bone '" + name + "': 'parent' must be a bone name or null");
     parent[name] = (p == bone.end() || p->is_null()) ? std::string() : p->get<std::string>();
   }
   std::unordered_map<std::string, int> state;  // 0 unseen, 1 on the current path, 2 placed
   std::vector<std::string> order;
-  std::function<void(const std::string&)> place = [&](const std::string& name) {
-    int& s = state[name];
-    if (s == 2) return;
-    if (s == 1) fail(file, "bone '" + name + "': parent chain has a cycle");
-    s = 1;
-    const std::string& p = parent.at(name);
-    if (!p.empty()) {
+  // Walks up from `name` to the first placed (or root) ancestor, then places that path top-down. Iterative: a
+  // recursive walk overflows the stack on a long (hostile) parent chain.
+  std::vector<std::string> path;
+  auto place = [&](const std::string& start) {
+    path.clear();
+    for (std::string name = start;;) {
+      int& s = state[name];
+      if (s == 2) break;
+      if (s == 1) fail(file, "bone '" + name + "': parent chain has a cycle");
+      s = 1;
+      path.push_back(name);
+      const std::string& p = parent.at(name);
+      if (p.empty()) break;
       if (!parent.count(p)) fail(file, "bone '" + name + "': parent '" + p + "' is not a bone");
-      place(p);
+      name = p;
     }
-    state[name] = 2;
-    order.push_back(name);
+    for (auto it = path.rbegin(); it != path.rend(); ++it) {
+      state[*it] = 2;
+      order.push_back(*it);
+    }
   };
   for (const auto& [name, unused] : parent) place(name);
   return order;
@@ -198,19 +227,28 @@ std::string_view makehuman_joint_source(std::string_view hanim_joint) {
 }
 
 ImportedBody load_makehuman(const std::filesystem::path& dir) {
+  const std::string obj = read_file(dir / "base.obj");
+  const std::string skel = read_file(dir / "default.mhskel");
+  const std::string weights = read_file(dir / "default_weights.mhw");
+  return load_makehuman_text(obj, skel, weights, dir.string());
+}
+
+ImportedBody load_makehuman_text(std::string_view base_obj, std::string_view mhskel, std::string_view mhw,
+                                 std::string_view dir_name) {
+  const std::filesystem::path dir{std::string(dir_name)};
   const std::filesystem::path obj_path = dir / "base.obj", skel_path = dir / "default.mhskel",
                               weights_path = dir / "default_weights.mhw";
   ImportedBody body;
 
   // --- the skin: group "body", decimetres -> metres --------------------------------------------------------
   ObjSource src;
-  Mesh obj = load_obj_file(obj_path, ObjOptions{{"body"}, 0.1f}, &src);
+  Mesh obj = load_obj_text(base_obj, obj_path.string(), ObjOptions{{"body"}, 0.1f}, &src);
   const std::size_t n = obj.vertex_count();
   std::vector<std::int32_t> mesh_vertex(src.file_positions.size(), -1);
   for (std::size_t v = 0; v < n; ++v) mesh_vertex[src.file_vertex[v]] = static_cast<std::int32_t>(v);
 
   // --- the MakeHuman skeleton: joint positions = mean of their marker vertices ---------------------------------
-  const nlohmann::json skel = read_json(skel_path);
+  const nlohmann::json skel = parse_json(mhskel, skel_path);
   if (!skel.contains("bones") || !skel["bones"].is_object() || !skel.contains("joints") ||
       !skel["joints"].is_object())
     fail(skel_path, "expected objects 'bones' and 'joints'");
@@ -223,7 +261,7 @@ ImportedBody load_makehuman(const std::filesystem::path& dir) {
     for (const auto& index : *it) {
       if (!index.is_number_integer() || index.get<long>() < 0 ||
           index.get<std::size_t>() >= src.file_positions.size())
-        fail(skel_path, "joint '" + key + "': vertex index " + index.dump() + " out of range (" +
+        fail(skel_path, "joint '" + key + "': vertex index " + describe(index) + " out of range (" +
                             std::to_string(src.file_positions.size()) + " vertices in base.obj)");
       sum += glm::dvec3(src.file_positions[index.get<std::size_t>()]);
     }
@@ -231,7 +269,7 @@ ImportedBody load_makehuman(const std::filesystem::path& dir) {
   };
 
   // --- weights: per body vertex, normalised, then strongest bone -> part, fold onto H-Anim joints ------------
-  const nlohmann::json weights_file = read_json(weights_path);
+  const nlohmann::json weights_file = parse_json(mhw, weights_path);
   if (!weights_file.contains("weights") || !weights_file["weights"].is_object())
     fail(weights_path, "expected an object 'weights'");
   const std::vector<std::string>& joint_names = hanim25_names();
@@ -243,13 +281,13 @@ ImportedBody load_makehuman(const std::filesystem::path& dir) {
     if (!list.is_array()) fail(weights_path, "bone '" + bone + "': weights are not a list");
     for (const auto& pair : list) {
       if (!pair.is_array() || pair.size() != 2 || !pair[0].is_number_integer() || !pair[1].is_number())
-        fail(weights_path, "bone '" + bone + "': expected [vertex, weight] pairs, got " + pair.dump());
+        fail(weights_path, "bone '" + bone + "': expected [vertex, weight] pairs, got " + describe(pair));
       const long v = pair[0].get<long>();
       const float w = pair[1].get<float>();
       if (v < 0 || static_cast<std::size_t>(v) >= mesh_vertex.size())
         fail(weights_path, "bone '" + bone + "': vertex " + std::to_string(v) + " out of range");
       if (!std::isfinite(w) || w < 0.0f)
-        fail(weights_path, "bone '" + bone + "': vertex " + std::to_string(v) + " has weight " + pair[1].dump());
+        fail(weights_path, "bone '" + bone + "': vertex " + std::to_string(v) + " has weight " + describe(pair[1]));
       if (mesh_vertex[v] < 0 || w == 0.0f) continue;
       influences[mesh_vertex[v]].emplace_back(id, w);
       weighs_body = true;
@@ -280,6 +318,8 @@ ImportedBody load_makehuman(const std::filesystem::path& dir) {
     for (const auto& [b, w] : inf) sum += w;
     if (sum <= 0.0f)
       fail(weights_path, "body vertex " + std::to_string(src.file_vertex[v]) + " has no weights");
+    if (!std::isfinite(sum))
+      fail(weights_path, "body vertex " + std::to_string(src.file_vertex[v]) + ": its weights overflow a float");
     const auto strongest = std::max_element(inf.begin(), inf.end(),
                                             [](const auto& a, const auto& b) { return a.second < b.second; });
     obj.part[v] = bone_part[strongest->first];

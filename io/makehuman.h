@@ -26,6 +26,10 @@
 namespace strata {
 
 ImportedBody load_makehuman(const std::filesystem::path& dir);
+// The same from the three files' contents in memory; `dir_name` stands for the directory in error messages (each
+// names "<dir_name>/base.obj", "<dir_name>/default.mhskel" or "<dir_name>/default_weights.mhw").
+ImportedBody load_makehuman_text(std::string_view base_obj, std::string_view mhskel, std::string_view mhw,
+                                 std::string_view dir_name);
 
 // The documented maps, exposed so tests and tools can check their coverage. Each returns an empty view for a
 // bone it does not know.

@@ -63,6 +63,24 @@ Document::Document(std::string_view text, std::string_view source_name) : source
     throw LoadError(source_name_ + ":" + std::to_string(line_of_offset(result.offset)) +
                     ": malformed XML: " + result.description() + near);
   }
+  // The readers walk the element tree recursively; a hostile file nested tens of thousands deep would overflow
+  // the stack (found by fuzzing). Real humanoids nest a few dozen levels (Joe: 34), so the walk below, iterative,
+  // refuses anything deeper than kMaxDepth instead of making every reader iterative.
+  constexpr int kMaxDepth = 256;
+  int depth = 0;
+  for (pugi::xml_node n = doc_.first_child(); n;) {
+    if (n.first_child()) {
+      n = n.first_child();
+      if (++depth > kMaxDepth)
+        throw LoadError(where(n.parent()) + ": elements nested deeper than " + std::to_string(kMaxDepth) + " levels");
+      continue;
+    }
+    while (n && !n.next_sibling()) {
+      n = n.parent();
+      --depth;
+    }
+    if (n) n = n.next_sibling();
+  }
 }
 
 int Document::line_of_offset(std::ptrdiff_t offset) const {

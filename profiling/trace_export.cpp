@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "io/atomic_file.h"
 #include "profiling/profiler.h"
 
 namespace strata {
@@ -21,7 +22,10 @@ namespace {
 // value, i.e. several times the file size in memory, just to be serialised once.
 class FileSink {
  public:
-  explicit FileSink(const std::filesystem::path& path) : path_(path), file_(path, std::ios::binary | std::ios::trunc) {
+  // Streams into a temporary sibling renamed over `path` by finish() (io/atomic_file.h): a failed or abandoned
+  // write (an exception unwinding past the sink) leaves no truncated trace behind.
+  explicit FileSink(const std::filesystem::path& path)
+      : path_(path), atomic_(path), file_(atomic_.temp_path(), std::ios::binary | std::ios::trunc) {
     if (!file_) throw std::runtime_error("profiler: cannot open '" + path_.string() + "' for writing");
     buffer_.reserve(kFlushBytes + 1024);
   }
@@ -36,6 +40,7 @@ class FileSink {
     flush();
     file_.close();
     if (file_.fail()) fail();
+    atomic_.commit();
   }
 
  private:
@@ -50,6 +55,7 @@ class FileSink {
   [[noreturn]] void fail() const { throw std::runtime_error("profiler: error while writing '" + path_.string() + "'"); }
 
   std::filesystem::path path_;
+  AtomicFile atomic_;
   std::ofstream file_;
   std::string buffer_;
 };

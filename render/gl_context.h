@@ -18,6 +18,10 @@ class GlContext {
   std::string version() const;
 };
 
+// AddressSanitizer builds: keeps the GL driver libraries loaded so that LeakSanitizer can name them (see
+// render/gl_context_egl.cpp). A no-op in every other build.
+void pin_gl_driver_libraries();
+
 // Creates a headless GL 4.5 core context and makes it current on the calling thread.
 // Throws std::runtime_error with a one-line reason (which EGL call failed, with its error code).
 std::unique_ptr<GlContext> create_headless_gl_context();

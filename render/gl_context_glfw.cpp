@@ -9,6 +9,7 @@
 #include <string>
 
 #include "render/camera.h"
+#include "render/gl_context.h"
 
 namespace strata {
 
@@ -123,6 +124,7 @@ GlfwWindow::GlfwWindow(const WindowOptions& options) : impl_(std::make_unique<Im
                              std::to_string(options.height) + " GL 4.5 core window (" + reason + ")");
   }
   impl_->window = window;
+  pin_gl_driver_libraries();
   glfwSetWindowUserPointer(window, impl_.get());
   glfwSetCursorPosCallback(window, Impl::on_cursor);
   glfwSetScrollCallback(window, Impl::on_scroll);

@@ -57,7 +57,8 @@ bool known_part_name(const std::string& name) {
 Json parse_json(std::string_view text, const std::string& source) {
   try {
     return Json::parse(text.begin(), text.end());
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {
+    // Not only parse_error: a number too large for a double ("1e400") is an out_of_range (found by fuzzing).
     throw LoadError(source + ": invalid JSON: " + e.what());
   }
 }

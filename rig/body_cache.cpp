@@ -1,5 +1,7 @@
 #include "rig/body_cache.h"
 
+#include "io/atomic_file.h"
+
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -129,23 +131,23 @@ void save_body_cache(const std::filesystem::path& file, std::uint64_t key, const
   std::error_code ec;
   std::filesystem::create_directories(file.parent_path(), ec);
   if (ec) return;
-  // Unique temporary name, then rename: concurrent processes (parallel tests) never see half a file.
-  const std::filesystem::path tmp = file.string() + ".tmp." + std::to_string(::getpid());
+  // A temporary sibling renamed into place (io/atomic_file.h): concurrent processes (parallel tests) never see
+  // half a file. The cache is an optimisation, so a failure is silent: the next start regenerates the body.
+  AtomicFile atomic(file);
   {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    std::ofstream out(atomic.temp_path(), std::ios::binary | std::ios::trunc);
     if (!out) return;
     out.write(kMagic, sizeof kMagic);
     out.write(reinterpret_cast<const char*>(&key), sizeof key);
     for (const Mesh& m : levels.levels) write_mesh(out, m);
     write_mesh(out, levels.cage);
-    if (!out) {
-      out.close();
-      std::filesystem::remove(tmp, ec);
-      return;
-    }
+    out.close();
+    if (!out) return;
   }
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) std::filesystem::remove(tmp, ec);
+  try {
+    atomic.commit();
+  } catch (const std::exception&) {
+  }
 }
 
 }  // namespace strata

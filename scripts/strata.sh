@@ -5,6 +5,9 @@
 #   bash scripts/strata.sh build                          install what is missing, build
 #   bash scripts/strata.sh validate-gltf                  export the walker at every body level and run the Khronos
 #                                                         glTF validator on the files (fails on any error)
+#   bash scripts/strata.sh sanitize [ctest args]          build in build-asan with ASan+UBSan, run every test
+#   bash scripts/strata.sh fuzz [SECONDS [TARGET...]]     build the libFuzzer targets in build-fuzz (clang 14),
+#                                                         run each for SECONDS (default 20) on its seed corpus
 # Environment: BUILD_DIR (default build), JOBS (default: all cores).
 set -euo pipefail
 
@@ -68,6 +71,51 @@ validate_gltf() {
   node "$ROOT/scripts/validate_gltf.js" "$prefix" "${files[@]}"
 }
 
+# ASan + UBSan over the whole suite (README, "Reliability"). -O1 keeps the build and the tests quick; asserts stay
+# on. Leaks are detected; scripts/lsan.supp silences leaks inside system libraries only (Mesa, EGL, X).
+sanitize() {
+  local dir="${ASAN_BUILD_DIR:-$ROOT/build-asan}"
+  export ASAN_OPTIONS="halt_on_error=1:abort_on_error=0:detect_leaks=1:detect_stack_use_after_return=0:strict_string_checks=1"
+  export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
+  export LSAN_OPTIONS="suppressions=$ROOT/scripts/lsan.supp:print_suppressions=0"
+  cmake -S "$ROOT" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O1 -g" \
+        -DSTRATA_SANITIZE=address,undefined -DSTRATA_BUILD_BENCHMARKS=OFF >/dev/null
+  cmake --build "$dir" -j "$JOBS"
+  cd "$dir"
+  # Left out: install_consumer (an uninstrumented program cannot load an ASan-instrumented libstrata) and the
+  # soak (ASan's quarantine holds freed memory back on purpose, so resident memory grows by design).
+  env -u DISPLAY ctest --output-on-failure -j "$JOBS" -E '^install_consumer$' -LE soak "$@"
+}
+
+FUZZ_TARGETS=(hanim obj bvh gltf makehuman binding)
+fuzz() {
+  local seconds="${1:-20}"
+  [ $# -gt 0 ] && shift
+  local targets=("$@")
+  [ ${#targets[@]} -eq 0 ] && targets=("${FUZZ_TARGETS[@]}")
+  local dir="${FUZZ_BUILD_DIR:-$ROOT/build-fuzz}"
+  CXX=clang++-14 cmake -S "$ROOT" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DSTRATA_FUZZ=ON \
+      -DSTRATA_BUILD_TESTS=OFF -DSTRATA_BUILD_BENCHMARKS=OFF >/dev/null
+  cmake --build "$dir" -j "$JOBS" --target strata_fuzz_all
+  bash "$ROOT/fuzz/build_corpus.sh" "$dir/corpus" >/dev/null
+  mkdir -p "$dir/artifacts"
+  local failed=()
+  for t in "${targets[@]}"; do
+    echo "strata.sh fuzz: $t for $seconds s" >&2
+    # -timeout: one input taking 10 s is a hang; -rss_limit_mb: a hostile size field must not allocate gigabytes.
+    if ! "$dir/fuzz_$t" "$dir/corpus/$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+         -print_final_stats=1 -artifact_prefix="$dir/artifacts/$t-" 2>"$dir/fuzz_$t.log"; then
+      failed+=("$t")
+      tail -n 40 "$dir/fuzz_$t.log" >&2
+    fi
+    grep -E '^stat::number_of_executed_units|^stat::peak_rss_mb' "$dir/fuzz_$t.log" | sed "s/^/$t: /" >&2 || true
+  done
+  if [ ${#failed[@]} -gt 0 ]; then
+    echo "strata.sh fuzz: findings in ${failed[*]} (reproducers in $dir/artifacts/)" >&2
+    return 1
+  fi
+}
+
 cmd="${1:-}"
 [ $# -gt 0 ] && shift
 case "$cmd" in
@@ -93,8 +141,18 @@ case "$cmd" in
     build
     validate_gltf
     ;;
+  sanitize)
+    install_missing
+    sanitize "$@"
+    ;;
+  fuzz)
+    # clang and its runtime (libFuzzer) only for this mode.
+    PACKAGES+=(clang-14 libclang-rt-14-dev)
+    install_missing
+    fuzz "$@"
+    ;;
   *)
-    echo "usage: bash scripts/strata.sh crowd|test|build|validate-gltf [args]" >&2
+    echo "usage: bash scripts/strata.sh crowd|test|build|validate-gltf|sanitize|fuzz [args]" >&2
     exit 2
     ;;
 esac

@@ -1,0 +1,193 @@
+// strata soak: runs a crowd for a given wall time and samples resident memory from /proc/self/statm, asserting it
+// stays flat after a warm-up. A leak of a few bytes per frame is invisible in a 60-frame run and fatal in a
+// day-long installation; this is the check for it (README, "Reliability").
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include "apps/commands.h"
+#include "apps/crowd_setup.h"
+#include "apps/json_output.h"
+#include "profiling/profiler.h"
+#include "render/camera.h"
+#include "render/gl_context.h"
+#include "render/skeleton_renderer.h"
+#include "systems/pose_gather.h"
+
+namespace strata::cli {
+namespace {
+
+struct SoakOptions {
+  SceneOptions scene;
+  double seconds = 120.0;
+  double warmup = -1.0;      // < 0: a quarter of the run, at least 10 s and at most 300 s
+  float fps = 60.0f;
+  bool unpaced = false;      // run frames back to back instead of at --fps real time
+  bool render = false;       // also render (headless EGL) and read back every frame
+  int width = 320, height = 240;
+  double tolerance_pct = 1.0;
+  double sample_every = 1.0;
+  std::string json;
+};
+
+// Resident set size in KiB: statm's second field is resident pages. /proc rather than getrusage: ru_maxrss is a
+// high-water mark and cannot show memory being given back.
+long resident_kib() {
+  std::ifstream statm("/proc/self/statm");
+  long size = 0, resident = 0;
+  if (!(statm >> size >> resident)) return -1;
+  return resident * (sysconf(_SC_PAGESIZE) / 1024);
+}
+
+int run_soak(const SoakOptions& o) {
+  using clock = std::chrono::steady_clock;
+  const double warmup = o.warmup >= 0.0 ? o.warmup : std::clamp(o.seconds / 4.0, 10.0, 300.0);
+  if (!(o.seconds > warmup)) {
+    std::cerr << "strata soak: --seconds must exceed the warm-up (" << warmup << " s)\n";
+    return 2;
+  }
+  if (resident_kib() < 0) {
+    std::cerr << "strata soak: cannot read /proc/self/statm\n";
+    return 1;
+  }
+  const int threads = thread_count(o.scene);
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  try {
+    std::unique_ptr<CrowdScene> scene = build_scene(o.scene);
+    std::unique_ptr<GlContext> context;
+    std::unique_ptr<SkeletonRenderer> renderer;
+    OrbitCamera camera;
+    std::vector<glm::vec3> joints;
+    std::vector<std::uint8_t> pixels;
+    const bool bodies = scene->body_level() >= 0;
+    if (o.render) {
+      context = create_headless_gl_context();
+      renderer = std::make_unique<SkeletonRenderer>(o.width, o.height);
+      renderer->options().draw_skeleton = !bodies;
+    }
+    // A rolling window and no trace: the profiler itself must not grow with the run.
+    Profiler profiler(120, false);
+    const float dt = 1.0f / o.fps;
+    const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
+    struct Sample {
+      double t;
+      long kib;
+    };
+    std::vector<Sample> samples;
+    samples.reserve(static_cast<std::size_t>(o.seconds / o.sample_every) + 16);
+    const auto start = clock::now();
+    auto next_frame = start;
+    double next_sample = 0.0;
+    std::size_t frames = 0;
+    for (;;) {
+      const double t = std::chrono::duration<double>(clock::now() - start).count();
+      if (t >= next_sample) {
+        samples.push_back({t, resident_kib()});
+        next_sample += o.sample_every;
+      }
+      if (t >= o.seconds) break;
+      profiler.begin_frame();
+      scene->simulate(dt, profiler);
+      if (renderer) {
+        WalkerLanes lanes = scene->lanes();
+        gather_joint_positions(lanes, joints);
+        glm::vec3 lo, hi;
+        if (bodies ? body_bounds(*scene, lo, hi) : joint_bounds(joints, lo, hi)) camera.frame_box_tight(lo, hi, aspect);
+        SkeletonDrawInput input{&scene->rig().skeleton, joints, scene->walker_count()};
+        renderer->render(input, camera.view(), camera.projection(aspect), body_draw_inputs(*scene));
+        renderer->read_rgba(pixels);
+      }
+      profiler.end_frame();
+      ++frames;
+      if (!o.unpaced) {
+        next_frame += std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(dt));
+        const auto now = clock::now();
+        if (next_frame > now) std::this_thread::sleep_until(next_frame);
+        else next_frame = now;  // behind schedule: do not try to catch up in a burst
+      }
+    }
+
+    // Flat means: no sample after the warm-up exceeds the first one after it by more than the tolerance.
+    const auto first_after = std::find_if(samples.begin(), samples.end(), [&](const Sample& s) { return s.t >= warmup; });
+    if (first_after == samples.end()) throw std::runtime_error("no memory sample after the warm-up");
+    long peak = first_after->kib, low = first_after->kib;
+    for (auto it = first_after; it != samples.end(); ++it) {
+      peak = std::max(peak, it->kib);
+      low = std::min(low, it->kib);
+    }
+    const long baseline = first_after->kib;
+    const double growth_pct = 100.0 * static_cast<double>(peak - baseline) / static_cast<double>(baseline);
+    const bool flat = growth_pct <= o.tolerance_pct;
+    const double wall = std::chrono::duration<double>(clock::now() - start).count();
+
+    nlohmann::json j;
+    j["command"] = "soak";
+    j["walkers"] = scene->walker_count();
+    j["level"] = scene->body_level();
+    j["render"] = o.render;
+    j["threads"] = threads;
+    j["paced_fps"] = o.unpaced ? nlohmann::json(nullptr) : nlohmann::json(o.fps);
+    j["wall_s"] = wall;
+    j["warmup_s"] = warmup;
+    j["frames"] = frames;
+    j["rss_kib_start"] = samples.front().kib;
+    j["rss_kib_after_warmup"] = baseline;
+    j["rss_kib_min_after_warmup"] = low;
+    j["rss_kib_max_after_warmup"] = peak;
+    j["rss_kib_end"] = samples.back().kib;
+    j["growth_pct"] = growth_pct;
+    j["tolerance_pct"] = o.tolerance_pct;
+    j["flat"] = flat;
+    nlohmann::json series = nlohmann::json::array();
+    for (const Sample& s : samples) series.push_back({s.t, s.kib});
+    j["samples_s_kib"] = series;
+    if (!o.json.empty()) write_json_file(o.json, j);
+
+    std::printf("strata soak: %zu walkers, %zu frames in %.0f s; RSS %ld KiB at start, %ld after %.0f s warm-up, "
+                "max %ld, end %ld: %+.2f %% (limit %.2f %%)\n",
+                scene->walker_count(), frames, wall, samples.front().kib, baseline, warmup, peak, samples.back().kib,
+                growth_pct, o.tolerance_pct);
+    if (!flat) {
+      std::cerr << "strata soak: resident memory grew " << growth_pct << " % after the warm-up (limit "
+                << o.tolerance_pct << " %)\n";
+      return 1;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "strata soak: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_soak_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<SoakOptions>();
+  auto* cmd = app.add_subcommand("soak", "Run a crowd for a wall time, asserting resident memory stays flat");
+  add_scene_options(*cmd, o->scene);
+  cmd->add_option("--seconds,-s", o->seconds, "Wall time to run")->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--warmup", o->warmup, "Seconds before the baseline sample (default: a quarter, 10-300 s)");
+  cmd->add_option("--fps", o->fps, "Simulation steps per second, also the real-time pace")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--unpaced", o->unpaced, "Run frames back to back instead of at --fps");
+  cmd->add_flag("--render", o->render, "Also render every frame headless (EGL) and read it back");
+  cmd->add_option("--width", o->width, "Render width")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", o->height, "Render height")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--tolerance-pct", o->tolerance_pct, "Allowed growth after the warm-up, percent")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--sample-every", o->sample_every, "Seconds between memory samples")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--json", o->json, "Write the report (with every sample) here");
+  cmd->callback([o, &exit_code] { exit_code = run_soak(*o); });
+}
+
+}  // namespace strata::cli
