@@ -22,6 +22,8 @@ add_library(strata_fuzz_loaders STATIC
   io/makehuman.cpp
   io/gltf.cpp
   rig/binding.cpp
+  io/muscle_file.cpp
+  rig/muscle_binding.cpp
   ${STRATA_EMBED_CPP})
 target_include_directories(strata_fuzz_loaders PUBLIC ${CMAKE_CURRENT_SOURCE_DIR})
 target_compile_options(strata_fuzz_loaders PUBLIC ${STRATA_FUZZ_FLAGS} PRIVATE -fsanitize=fuzzer-no-link ${STRATA_WARNINGS})
@@ -30,9 +32,8 @@ target_link_libraries(strata_fuzz_loaders
   PUBLIC glm::glm
   PRIVATE pugixml::pugixml nlohmann_json::nlohmann_json TinyGLTF::TinyGLTF TBB::tbb)
 
-# One target per loader. The lead's muscle file loader adds `muscle` here (fuzz/fuzz_muscle.cpp) and its
-# sources to strata_fuzz_loaders above.
-set(STRATA_FUZZ_TARGETS hanim obj bvh gltf makehuman binding)
+# One target per loader.
+set(STRATA_FUZZ_TARGETS hanim obj bvh gltf makehuman binding muscle)
 add_custom_target(strata_fuzz_all)
 foreach(target ${STRATA_FUZZ_TARGETS})
   add_executable(fuzz_${target} fuzz/fuzz_${target}.cpp)

@@ -1,7 +1,9 @@
 #include "rig/body_rig.h"
 
 #include "io/hanim_loader.h"
+#include "io/muscle_file.h"
 #include "rig/binding.h"
+#include "rig/muscle_binding.h"
 #include "rig/body_generator.h"
 
 namespace strata {
@@ -28,6 +30,14 @@ std::shared_ptr<const Body> default_bound_body() {
   static const std::shared_ptr<const Body> body = bind_body(default_body().levels, load_default_humanoid().skeleton,
                                                                 BindingMethod::ThreeStep, &default_body().cage);
   return body;
+}
+
+// Declared in rig/muscle_binding.h; defined here, beside the default body it binds, so the muscle binder itself
+// (and the muscle loader's fuzz target) does not pull in the body generator.
+std::shared_ptr<const MuscleRig> default_muscle_rig() {
+  static const std::shared_ptr<const MuscleRig> rig =
+      bind_muscle_rig(default_muscles(load_default_humanoid().skeleton), *default_bound_body());
+  return rig;
 }
 
 }  // namespace strata

@@ -5,9 +5,6 @@
 
 #include <glm/geometric.hpp>
 
-#include "io/hanim_loader.h"
-#include "io/muscle_file.h"
-#include "rig/body_rig.h"
 
 namespace strata {
 namespace {
@@ -120,12 +117,6 @@ std::shared_ptr<const MuscleRig> bind_muscle_rig(MuscleSet set, const Body& body
   for (const BodyLevel& level : body.levels) rig->levels.push_back(bind_muscles(level.mesh, set));
   if (body.cage) rig->cage = bind_muscles(body.cage->mesh, set);
   rig->set = std::move(set);
-  return rig;
-}
-
-std::shared_ptr<const MuscleRig> default_muscle_rig() {
-  static const std::shared_ptr<const MuscleRig> rig =
-      bind_muscle_rig(default_muscles(load_default_humanoid().skeleton), *default_bound_body());
   return rig;
 }
 

@@ -87,7 +87,7 @@ sanitize() {
   env -u DISPLAY ctest --output-on-failure -j "$JOBS" -E '^install_consumer$' -LE soak "$@"
 }
 
-FUZZ_TARGETS=(hanim obj bvh gltf makehuman binding)
+FUZZ_TARGETS=(hanim obj bvh gltf makehuman binding muscle)
 fuzz() {
   local seconds="${1:-20}"
   [ $# -gt 0 ] && shift
