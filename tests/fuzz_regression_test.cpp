@@ -117,6 +117,26 @@ TEST(FuzzRegressions, GltfNodeNamingAMissingMesh) {
   }
 }
 
+TEST(FuzzRegressions, NamesWithNewlinesStillGiveOneLine) {
+  // A JSON "\n" escape or a newline inside an XML attribute puts a line break into a quoted name.
+  try {
+    (void)load_binding_tables(read_text(kDir / "binding" / "joint_name_with_newline.bin"), "", "nl.json");
+    ADD_FAILURE() << "loaded";
+  } catch (const LoadError& e) {
+    EXPECT_EQ(std::string(e.what()), "nl.json: parts.rFoot: unknown joint 'r_\\nkle'");
+  }
+  try {
+    (void)load_humanoid_text(read_text(kDir / "hanim" / "joint_name_with_newline.x3d"), "nl.x3d");
+    ADD_FAILURE() << "loaded";
+  } catch (const LoadError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    EXPECT_NE(m.find("nl.x3d:2:"), std::string::npos) << m;
+    EXPECT_NE(m.find("a\\nb"), std::string::npos) << m;
+  }
+  EXPECT_EQ(LoadError::one_line("a\tb\r\x01"), "a\tb\\r\\x01");
+}
+
 TEST(FuzzRegressions, JsonNumberOverflowIsALoadError) {
   // nlohmann throws out_of_range, not parse_error, for a number beyond double: both loaders' JSON must say so in
   // a LoadError naming the file.
