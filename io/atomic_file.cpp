@@ -17,14 +17,11 @@ std::atomic<unsigned> g_sequence{0};
 }  // namespace
 
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
-  // Appended piece by piece: "." + std::string trips GCC 12's -Wrestrict false positive.
-  std::string name = ".";
-  name += target_.filename().string();
-  name += '.';
-  name += std::to_string(::getpid());
-  name += '.';
-  name += std::to_string(g_sequence.fetch_add(1));
-  name += ".tmp";
+  // Appended piecewise: GCC 12 warns (-Wrestrict, a known false positive) on "." + std::string(...).
+  std::string name(1, '.');
+  name.append(target_.filename().string());
+  name.append(".").append(std::to_string(::getpid()));
+  name.append(".").append(std::to_string(g_sequence.fetch_add(1))).append(".tmp");
   temp_ = target_.parent_path() / name;
 }
 

@@ -20,6 +20,7 @@
 #include "io/bvh.h"
 #include "io/gltf.h"
 #include "io/hanim_loader.h"
+#include "io/muscle_file.h"
 #include "io/makehuman.h"
 #include "io/obj.h"
 #include "rig/binding.h"
@@ -76,6 +77,13 @@ const std::map<std::string, std::function<void(const std::string&, const std::st
          const auto parts = split_nul(b, 2);
          (void)load_binding_tables(parts[0], parts[1], name, name);
        }},
+      {"muscle",
+       [](const std::string& b, const std::string& name) {
+         static const Skeleton skeleton = load_default_humanoid().skeleton;
+         const auto parts = split_nul(b, 2);
+         const MuscleSet set = parse_muscles(parts[0], name, skeleton);
+         (void)parse_muscle_overrides(parts[1], name, set);
+       }},
   };
   return t;
 }
@@ -115,6 +123,26 @@ TEST(FuzzRegressions, GltfNodeNamingAMissingMesh) {
       EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
     }
   }
+}
+
+TEST(FuzzRegressions, NamesWithNewlinesStillGiveOneLine) {
+  // A JSON "\n" escape or a newline inside an XML attribute puts a line break into a quoted name.
+  try {
+    (void)load_binding_tables(read_text(kDir / "binding" / "joint_name_with_newline.bin"), "", "nl.json");
+    ADD_FAILURE() << "loaded";
+  } catch (const LoadError& e) {
+    EXPECT_EQ(std::string(e.what()), "nl.json: parts.rFoot: unknown joint 'r_\\nkle'");
+  }
+  try {
+    (void)load_humanoid_text(read_text(kDir / "hanim" / "joint_name_with_newline.x3d"), "nl.x3d");
+    ADD_FAILURE() << "loaded";
+  } catch (const LoadError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    EXPECT_NE(m.find("nl.x3d:2:"), std::string::npos) << m;
+    EXPECT_NE(m.find("a\\nb"), std::string::npos) << m;
+  }
+  EXPECT_EQ(LoadError::one_line("a\tb\r\x01"), "a\tb\\r\\x01");
 }
 
 TEST(FuzzRegressions, JsonNumberOverflowIsALoadError) {
