@@ -275,10 +275,10 @@ int run_subdiv_report(const SubdivReportOptions& o) {
       // Far's UpdateValues on AoS, cage in its original vertex order.
       std::unique_ptr<Far::TopologyRefiner> refiner = make_cage_refiner(body.cage->mesh);
       refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(depth));
-      Far::StencilTableFactory::Options so;
+      Far::StencilTableFactoryReal<float>::Options so;
       so.generateIntermediateLevels = false;
       so.generateOffsets = true;
-      std::unique_ptr<const Far::StencilTable> table(Far::StencilTableFactory::Create(*refiner, so));
+      std::unique_ptr<const Far::StencilTableReal<float>> table(Far::StencilTableFactoryReal<float>::Create(*refiner, so));
       std::vector<Point3> cage_aos(cage_n), refined_aos(n), far_aos(n);
       for (std::size_t i = 0; i < cage_n; ++i)
         cage_aos[surface.cage_layout.original[i]] = {co.px[i], co.py[i], co.pz[i]};

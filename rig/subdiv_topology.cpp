@@ -101,11 +101,11 @@ std::vector<SubdivStencils> level_by_level(const Far::TopologyRefiner& refiner, 
 }
 
 SubdivStencils factorised(const Far::TopologyRefiner& refiner) {
-  Far::StencilTableFactory::Options options;
+  Far::StencilTableFactoryReal<float>::Options options;
   options.generateIntermediateLevels = false;  // only the last level, indexed like GetLevel(L)'s vertices
   options.generateOffsets = true;
-  options.interpolationMode = Far::StencilTableFactory::INTERPOLATE_VERTEX;
-  std::unique_ptr<const Far::StencilTable> table(Far::StencilTableFactory::Create(refiner, options));
+  options.interpolationMode = Far::StencilTableFactoryReal<float>::INTERPOLATE_VERTEX;
+  std::unique_ptr<const Far::StencilTableReal<float>> table(Far::StencilTableFactoryReal<float>::Create(refiner, options));
   std::vector<RecordedRow> rows(static_cast<std::size_t>(table->GetNumStencils()));
   for (int i = 0; i < table->GetNumStencils(); ++i) {
     const Far::Stencil stencil = table->GetStencil(static_cast<Far::Index>(i));

@@ -114,9 +114,9 @@ TEST(Subdiv, RestCageMatchesOpenSubdivRefinement) {
       primvar.Interpolate(l, level, next);
       level = std::move(next);
     }
-    Far::StencilTableFactory::Options options;
+    Far::StencilTableFactoryReal<float>::Options options;
     options.generateIntermediateLevels = false;
-    std::unique_ptr<const Far::StencilTable> table(Far::StencilTableFactory::Create(*refiner, options));
+    std::unique_ptr<const Far::StencilTableReal<float>> table(Far::StencilTableFactoryReal<float>::Create(*refiner, options));
     std::vector<Point3> cage_points(cage.vertex_count()), factorised(static_cast<std::size_t>(table->GetNumStencils()));
     for (std::size_t i = 0; i < cage.vertex_count(); ++i)
       cage_points[i] = {cage.positions[i].x, cage.positions[i].y, cage.positions[i].z};
