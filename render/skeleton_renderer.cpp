@@ -188,27 +188,8 @@ layout(location = 2) in float a_pz;
 layout(location = 3) in float a_nx;
 layout(location = 4) in float a_ny;
 layout(location = 5) in float a_nz;
-uniform mat4 u_view;
-uniform mat4 u_projection;
-out vec3 v_normal;
-out vec3 v_position;
-void main() {
-  vec4 view_position = u_view * vec4(a_px, a_py, a_pz, 1.0);
-  v_position = view_position.xyz;
-  v_normal = mat3(u_view) * vec3(a_nx, a_ny, a_nz);
-  gl_Position = u_projection * view_position;
-}
-)";
-
-// The render benchmark's reference (SkeletonRenderer::render_instanced_reference): one mesh, static, drawn once
-// per instance moved by a per-instance offset: raw instancing, nothing streamed per frame.
-constexpr const char* kInstancedBodyVertexShader = R"(#version 450 core
-layout(location = 0) in float a_px;
-layout(location = 1) in float a_py;
-layout(location = 2) in float a_pz;
-layout(location = 3) in float a_nx;
-layout(location = 4) in float a_ny;
-layout(location = 5) in float a_nz;
+// Per-instance offset, for the render benchmark's raw-instancing reference only; the crowd draw leaves the array
+// disabled, so GL supplies the generic attribute's initial value (0, 0, 0). One shader serves both draws.
 layout(location = 6) in vec3 a_offset;
 uniform mat4 u_view;
 uniform mat4 u_projection;
@@ -402,8 +383,8 @@ struct SkeletonRenderer::Impl {
   std::vector<const void*> body_offsets;
   std::vector<GLint> body_base_vertices;
   std::size_t triangles_drawn = 0;
-  // The instanced reference: its own program, VAO, static mesh buffers and instance buffer.
-  GLuint instanced_program = 0, instanced_vao = 0, instanced_mesh = 0, instanced_offsets = 0;
+  // The instanced reference: the body program with its own VAO, static mesh buffers and instance buffer.
+  GLuint instanced_vao = 0, instanced_mesh = 0, instanced_offsets = 0;
   BodySlot instanced_slot{};
 
   static bool slot_matches(const BodySlot& slot, const BodyDrawInput& b) {
@@ -522,8 +503,7 @@ struct SkeletonRenderer::Impl {
     const GLuint instanced_buffers[] = {instanced_mesh, instanced_offsets, instanced_slot.indices};
     glDeleteBuffers(3, instanced_buffers);
     glDeleteVertexArrays(1, &instanced_vao);
-    glDeleteProgram(instanced_program);
-    instanced_program = instanced_vao = instanced_mesh = instanced_offsets = 0;
+    instanced_vao = instanced_mesh = instanced_offsets = 0;
     instanced_slot = BodySlot{};
     for (BodySlot& slot : body_slots) {
       glDeleteBuffers(1, &slot.indices);
@@ -623,7 +603,6 @@ SkeletonRenderer::SkeletonRenderer(int width, int height, SkeletonRenderOptions 
     r.bone = upload_mesh(make_bone_mesh());
     r.joint = upload_mesh(make_sphere_mesh());
     r.body_program = link_program(kBodyVertexShader, kMeshFragmentShader, "body");
-    r.instanced_program = link_program(kInstancedBodyVertexShader, kMeshFragmentShader, "instanced body");
     r.create_body_vao();
     glCreateVertexArrays(1, &r.ground_vao);
     r.create_targets();
@@ -803,7 +782,7 @@ void SkeletonRenderer::render_instanced_reference(const BodyDrawInput& mesh, std
                     GL_STREAM_DRAW);
   glVertexArrayVertexBuffer(r.instanced_vao, 6, r.instanced_offsets, 0, sizeof(glm::vec3));
   r.begin_frame();
-  const GLuint p = r.instanced_program;
+  const GLuint p = r.body_program;
   glUseProgram(p);
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));
