@@ -182,7 +182,9 @@ int run_crowd(const CrowdOptions& o) {
     const int clip = scene.clip_of(0);
     summary["body_level"] = scene.body_level();
     summary["body_level_name"] = body_level_name(scene.body_level());
-    summary["body_vertices"] = bodies ? scene.skinned().vertex_count : 0;
+    // Vertices per walker of the finest level drawn in the last frame (under --level auto, levels vary by walker).
+    const auto draws = scene.body_draws();
+    summary["body_vertices"] = bodies && !draws.empty() ? draws.front().skinned->vertex_count : 0;
     const auto lod = scene.lod_counts();
     // Walkers skinned and drawn at each level in the last frame, and walkers the camera did not see.
     summary["lod_last_frame"] = {{"level0", lod[0]}, {"level1", lod[1]}, {"level2", lod[2]}, {"culled", lod[3]}};
