@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/strata_cli_runner.h"
+
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -18,24 +20,10 @@
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Result {
-  int status = -1;
-  std::string out;  // stdout and stderr together
-};
+using Result = strata::test::CliResult;
 
 Result run(const std::string& args, const std::string& env_assignments = "") {
-  // DISPLAY unset: headless rendering must not need an X server.
-  std::string cmd = "env -u DISPLAY " + env_assignments + " " + std::string(STRATA_BINARY) + " " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  int status = pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return strata::test::run_strata(args, env_assignments);
 }
 
 fs::path scratch(const std::string& name) {

@@ -1,12 +1,12 @@
 // glTF export: the shipped walker written as GLB (io/gltf_export.h) with a baked walk (motion/walk_bake.h), read
 // back by the project's own importer (io/gltf.h) and by a minimal GLB parser here, and posed against the engine.
 #include <gtest/gtest.h>
+
+#include "tests/strata_cli_runner.h"
 #include <nlohmann/json.hpp>
 
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -404,23 +404,8 @@ TEST(ExportErrors, TruncatedFileIsAOneLineLoadErrorNamingIt) {
   }
 }
 
-struct CliResult {
-  int status = -1;
-  std::string out;
-};
-
-CliResult run_cli(const std::string& args) {
-  const std::string cmd = "env -u DISPLAY " + std::string(STRATA_BINARY) + " " + args + " 2>&1";
-  CliResult r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using test::CliResult;
+CliResult run_cli(const std::string& args) { return test::run_strata(args); }
 
 TEST(StrataExport, WritesAGlbTheImporterReads) {
   const fs::path file = scratch_dir() / "cli.glb";

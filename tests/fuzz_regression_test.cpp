@@ -17,6 +17,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "fuzz/fuzz_common.h"
 #include "io/bvh.h"
 #include "io/gltf.h"
 #include "io/hanim_loader.h"
@@ -37,20 +38,6 @@ std::string read_text(const fs::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-std::vector<std::string_view> split_nul(std::string_view text, std::size_t parts) {
-  std::vector<std::string_view> out;
-  while (out.size() + 1 < parts) {
-    const std::size_t nul = text.find('\0');
-    if (nul == std::string_view::npos) break;
-    out.push_back(text.substr(0, nul));
-    text.remove_prefix(nul + 1);
-  }
-  out.push_back(text);
-  out.resize(parts);
-  return out;
-}
-
-// What each fuzz target does with its input (fuzz/fuzz_<target>.cpp), `name` standing for the file.
 const std::map<std::string, std::function<void(const std::string&, const std::string&)>>& targets() {
   static const std::map<std::string, std::function<void(const std::string&, const std::string&)>> t = {
       {"hanim", [](const std::string& b, const std::string& name) { (void)to_rig(load_humanoid_text(b, name)); }},
@@ -69,18 +56,18 @@ const std::map<std::string, std::function<void(const std::string&, const std::st
        }},
       {"makehuman",
        [](const std::string& b, const std::string& name) {
-         const auto parts = split_nul(b, 3);
+         const auto parts = fuzz::split_parts(b, 3);
          (void)load_makehuman_text(parts[0], parts[1], parts[2], name);
        }},
       {"binding",
        [](const std::string& b, const std::string& name) {
-         const auto parts = split_nul(b, 2);
+         const auto parts = fuzz::split_parts(b, 2);
          (void)load_binding_tables(parts[0], parts[1], name, name);
        }},
       {"muscle",
        [](const std::string& b, const std::string& name) {
          static const Skeleton skeleton = load_default_humanoid().skeleton;
-         const auto parts = split_nul(b, 2);
+         const auto parts = fuzz::split_parts(b, 2);
          const MuscleSet set = parse_muscles(parts[0], name, skeleton);
          (void)parse_muscle_overrides(parts[1], name, set);
        }},

@@ -2,12 +2,12 @@
 // refinement, watertightness, no NaN on extreme poses, run-time level switching, open boundaries and
 // face-varying UVs.
 #include <gtest/gtest.h>
+
+#include "tests/strata_cli_runner.h"
 #include <nlohmann/json.hpp>
 
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -350,23 +350,8 @@ TEST(Subdiv, RejectsBadInput) {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status = -1;
-  std::string out;  // stdout and stderr together
-};
-
-Result run(const std::string& args) {
-  const std::string cmd = "env -u DISPLAY " + std::string(STRATA_BINARY) + " " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using Result = test::CliResult;
+Result run(const std::string& args) { return test::run_strata(args); }
 
 fs::path scratch(const std::string& name) {
   fs::path p = fs::temp_directory_path() / ("strata_subdiv_test_" + std::to_string(getpid())) / name;
