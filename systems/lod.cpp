@@ -1,6 +1,7 @@
 #include "systems/lod.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <glm/geometric.hpp>
@@ -9,28 +10,34 @@
 namespace strata {
 namespace {
 
-// Is the sphere at least partly inside the frustum? The six planes come straight from the rows of the
-// view-projection matrix (Gribb & Hartmann): for clip = M p, inside means -w <= x, y, z <= w.
-bool sphere_visible(const glm::mat4& m, const glm::vec3& c, float r) {
-  const glm::vec4 row0(m[0][0], m[1][0], m[2][0], m[3][0]);
-  const glm::vec4 row1(m[0][1], m[1][1], m[2][1], m[3][1]);
-  const glm::vec4 row2(m[0][2], m[1][2], m[2][2], m[3][2]);
-  const glm::vec4 row3(m[0][3], m[1][3], m[2][3], m[3][3]);
-  const glm::vec4 planes[6] = {row3 + row0, row3 - row0, row3 + row1, row3 - row1, row3 + row2, row3 - row2};
-  const glm::vec4 p(c, 1.0f);
-  for (const glm::vec4& plane : planes) {
-    const float length = glm::length(glm::vec3(plane));
-    if (!(length > 0.0f)) continue;
-    if (glm::dot(plane, p) < -r * length) return false;
+// The six frustum planes, normalised, straight from the rows of the view-projection matrix (Gribb & Hartmann):
+// for clip = M p, inside means -w <= x, y, z <= w. Built once per view, not per walker.
+struct Frustum {
+  std::array<glm::vec4, 6> planes{};
+  int count = 0;  // planes with a usable normal
+
+  explicit Frustum(const glm::mat4& m) {
+    const glm::vec4 row0(m[0][0], m[1][0], m[2][0], m[3][0]);
+    const glm::vec4 row1(m[0][1], m[1][1], m[2][1], m[3][1]);
+    const glm::vec4 row2(m[0][2], m[1][2], m[2][2], m[3][2]);
+    const glm::vec4 row3(m[0][3], m[1][3], m[2][3], m[3][3]);
+    for (const glm::vec4& plane : {row3 + row0, row3 - row0, row3 + row1, row3 - row1, row3 + row2, row3 - row2}) {
+      const float length = glm::length(glm::vec3(plane));
+      if (length > 0.0f) planes[static_cast<std::size_t>(count++)] = plane / length;
+    }
   }
-  return true;
-}
+  // Is the sphere at least partly inside?
+  bool sees(const glm::vec3& c, float r) const {
+    const glm::vec4 p(c, 1.0f);
+    for (int i = 0; i < count; ++i)
+      if (glm::dot(planes[static_cast<std::size_t>(i)], p) < -r) return false;
+    return true;
+  }
+};
 
-}  // namespace
-
-int lod_decide(const LodView& view, const LodPolicy& policy, const glm::vec3& center, float radius, float height,
-               int previous, int fixed_level, int levels) {
-  if (!sphere_visible(view.view_projection, center, radius)) return -1;
+int decide(const Frustum& frustum, const LodView& view, const LodPolicy& policy, const glm::vec3& center,
+           float radius, float height, int previous, int fixed_level, int levels) {
+  if (!frustum.sees(center, radius)) return -1;
   if (fixed_level >= 0) return fixed_level;
   const float distance = std::max(glm::length(center - view.eye), 1e-3f);
   const float pixels = view.focal_px * height / distance;
@@ -46,8 +53,16 @@ int lod_decide(const LodView& view, const LodPolicy& policy, const glm::vec3& ce
   return std::clamp(level, 0, std::max(levels - 1, 0));
 }
 
+}  // namespace
+
+int lod_decide(const LodView& view, const LodPolicy& policy, const glm::vec3& center, float radius, float height,
+               int previous, int fixed_level, int levels) {
+  return decide(Frustum(view.view_projection), view, policy, center, radius, height, previous, fixed_level, levels);
+}
+
 void lod_system(const LodView& view, const LodPolicy& policy, const WalkerLanes& lanes, float body_height,
                 int fixed_level, int levels) {
+  const Frustum frustum(view.view_projection);
   for (std::size_t w = 0; w < lanes.count; ++w) {
     const Placement P = placement_of(lanes, w);
     // The root's posed position (F(0)'s translation, humanoid space) placed in the world; the sphere reaches
@@ -57,7 +72,7 @@ void lod_system(const LodView& view, const LodPolicy& policy, const WalkerLanes&
     const glm::vec3 center = P.point(root);
     float& lod = lanes.at(lanes.lod, 0)[w];
     const int previous = static_cast<int>(lod);
-    lod = static_cast<float>(lod_decide(view, policy, center, 0.75f * height, height, previous, fixed_level, levels));
+    lod = static_cast<float>(decide(frustum, view, policy, center, 0.75f * height, height, previous, fixed_level, levels));
   }
 }
 
