@@ -1,7 +1,8 @@
-// strata view: the crowd scene in a GLFW window with an orbit camera. Left-drag orbits, right/middle-drag pans,
-// the wheel zooms; Space pauses, N single-steps, S saves a screenshot, L cycles the body level (0, 1, 2, auto, S1, S2,
-// S3), Esc/Q quits. The window title carries
-// the live per-system timings; the full table prints on exit.
+// strata view: the crowd scene in a GLFW window with an orbit camera and a Dear ImGui control panel
+// (ui/view_panel.h: crowd size, level policy, gait, muscle gains, live per-system timing chart, pause/step,
+// screenshot). Left-drag orbits, right/middle-drag pans, the wheel zooms; Space pauses, N single-steps, S saves a
+// screenshot, L cycles the body level (0, 1, 2, auto, S1, S2, S3), Esc/Q quits. The live per-system timings also
+// go to stderr; the full table prints on exit.
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 
@@ -10,10 +11,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "apps/commands.h"
 #include "apps/crowd_setup.h"
+#include "apps/view_session.h"
 #include "io/image_writer.h"
 #include "profiling/profiler.h"
 #include "render/camera.h"
@@ -21,6 +24,8 @@
 #include "render/skeleton_renderer.h"
 #include "systems/frame_script.h"
 #include "systems/pose_gather.h"
+#include "ui/imgui_layer.h"
+#include "ui/view_panel.h"
 
 namespace strata::cli {
 namespace {
@@ -33,6 +38,7 @@ struct ViewOptions {
   bool hidden = false;
   std::string screenshot_dir = "out/view";
   bool skeleton_overlay = false;
+  bool no_panel = false;
 };
 
 std::string timing_title(const Profiler& profiler, double fps) {
@@ -50,8 +56,9 @@ int run_view(const ViewOptions& o) {
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
-    std::unique_ptr<CrowdScene> built = build_scene(o.scene);
-    CrowdScene& scene = *built;
+    ViewSession session(o.scene);
+    ViewPanelState& panel = session.panel();
+    panel.show_skeleton = o.skeleton_overlay;
 
     WindowOptions wo;
     wo.width = o.width;
@@ -60,12 +67,13 @@ int run_view(const ViewOptions& o) {
     GlfwWindow window(wo);
     glm::ivec2 fb = window.framebuffer_size();
     SkeletonRenderer renderer(fb.x, fb.y);
+    // The panel attaches to the window's callbacks; --no-panel leaves the scene alone on screen.
+    std::optional<ImGuiLayer> ui;
+    if (!o.no_panel) ui.emplace(window.native_handle());
     Profiler profiler(120, false);
     OrbitCamera camera;
     std::vector<glm::vec3> joints;
     std::vector<std::uint8_t> pixels;
-    bool paused = false;
-    bool show_skeleton = o.skeleton_overlay;
     bool framed = false;
     std::size_t frame = 0, screenshots = 0;
     auto last = std::chrono::steady_clock::now();
@@ -74,19 +82,21 @@ int run_view(const ViewOptions& o) {
     while (!window.should_close() && (o.frames == 0 || frame < o.frames)) {
       WindowInput input = window.poll_events();
       if (input.quit) break;
-      if (input.toggle_pause) paused = !paused;
+      // The keys and the panel's buttons drive the same state.
+      if (input.toggle_pause) panel.paused = !panel.paused;
+      panel.step_requests += input.single_steps;
+      panel.screenshot_requested |= input.screenshot;
+      if (session.apply_crowd_request()) framed = false;
+      CrowdScene& scene = session.scene();
       if (input.level_steps > 0 && scene.body_level() >= 0) {
-        // The levels this body has: its meshes, automatic, then S1..S3 when it has a cage.
-        std::vector<int> levels;
-        for (std::size_t l = 0; l < scene.rig().body->levels.size(); ++l) levels.push_back(static_cast<int>(l));
-        levels.push_back(kAutoBodyLevel);
-        if (scene.rig().body->cage)
-          for (int d = 1; d <= kMaxSubdivDepth; ++d) levels.push_back(subdiv_level(d));
-        const auto at = std::find(levels.begin(), levels.end(), scene.body_level());
-        const std::size_t from = at == levels.end() ? 0 : static_cast<std::size_t>(at - levels.begin());
-        scene.set_body_level(levels[(from + static_cast<std::size_t>(input.level_steps)) % levels.size()]);
-        scene.simulate(0.0f, profiler);  // fill the new level's output before it is drawn
-        std::cout << "strata view: body level " << body_level_name(scene.body_level()) << "\n";
+        const std::vector<int> levels = selectable_body_levels(scene);
+        if (!levels.empty()) {
+          const auto at = std::find(levels.begin(), levels.end(), scene.body_level());
+          const std::size_t from = at == levels.end() ? 0 : static_cast<std::size_t>(at - levels.begin());
+          scene.set_body_level(levels[(from + static_cast<std::size_t>(input.level_steps)) % levels.size()]);
+          scene.simulate(0.0f, profiler);  // fill the new level's output before it is drawn
+          std::cout << "strata view: body level " << body_level_name(scene.body_level()) << "\n";
+        }
       }
       if (input.resized) {
         fb = window.framebuffer_size();
@@ -102,47 +112,61 @@ int run_view(const ViewOptions& o) {
       profiler.begin_frame();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
-        if (!paused || input.single_steps > 0 || !framed) {
-          const int steps = paused ? std::max(input.single_steps, framed ? 0 : 1) : 1;
-          for (int s = 0; s < steps; ++s) scene.simulate(paused ? 1.0f / 30.0f : dt, profiler);
-        }
+        const int level_before = scene.body_level();
+        session.advance(dt, profiler);
         STRATA_PROFILE_SCOPE(profiler, "render");
         gather_joint_positions(scene.lanes(), joints);
-        if (!framed) {
+        if (!framed || panel.frame_camera_requested) {
           glm::vec3 lo, hi;
           if (joint_bounds(joints, lo, hi)) camera.frame_box(lo, hi, aspect);
           framed = true;
+          panel.frame_camera_requested = false;
         }
         SkeletonDrawInput draw{&scene.rig().skeleton, joints, scene.walker_count()};
         const std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
-        renderer.options().draw_skeleton = bodies.empty() || show_skeleton;
+        renderer.options().draw_skeleton = bodies.empty() || panel.show_skeleton;
         renderer.render(draw, camera.view(), camera.projection(aspect), bodies);
+        panel.triangles_drawn = renderer.triangles_drawn();
         scene.set_view(lod_view(camera, aspect, fb.y));  // culling and --level auto follow the orbit camera
-        if (input.screenshot) {
+        if (panel.screenshot_requested) {
+          panel.screenshot_requested = false;
+          // The scene without the panel: a screenshot is for showing the crowd, not the tool.
           renderer.read_rgba(pixels);
           std::filesystem::create_directories(o.screenshot_dir);
           char name[40];
           std::snprintf(name, sizeof name, "screenshot_%03zu.png", screenshots++);
           auto path = std::filesystem::path(o.screenshot_dir) / name;
           write_image(path, renderer.width(), renderer.height(), 4, pixels);
-          std::cout << "strata view: saved " << path.string() << "\n";
+          panel.last_message = "saved " + path.string();
+          std::cout << "strata view: " << panel.last_message << "\n";
         }
         renderer.blit_to_default_framebuffer(fb.x, fb.y);
+        if (ui) {
+          STRATA_PROFILE_SCOPE(profiler, "ui");
+          ui->begin_frame();
+          draw_view_panel(scene, panel);
+          ui->render(fb);
+          window.set_ui_capture(ui->wants_mouse(), ui->wants_keyboard());
+        }
+        // A level picked in the panel is skinned on the next frame; fill it now so nothing blinks.
+        if (scene.body_level() != level_before) scene.simulate(0.0f, profiler);
         window.swap_buffers();
       }
       profiler.end_frame();
+      panel.timings.push(profiler);
       ++frame;
       if (now - title_time > std::chrono::milliseconds(500)) {
         auto stats = profiler.stats();
         double frame_ms = 0;
         for (const auto& s : stats)
           if (s.name == "frame") frame_ms = s.mean_ms;
-        std::fprintf(stderr, "\r%s   ", timing_title(profiler, frame_ms > 0 ? 1000.0 / frame_ms : 0.0).c_str());
+        panel.fps = frame_ms > 0 ? static_cast<float>(1000.0 / frame_ms) : 0.0f;
+        std::fprintf(stderr, "\r%s   ", timing_title(profiler, panel.fps).c_str());
         title_time = now;
       }
     }
     std::fputc('\n', stderr);
-    std::cout << "strata view: " << frame << " frames, " << scene.walker_count() << " walkers\n";
+    std::cout << "strata view: " << frame << " frames, " << session.scene().walker_count() << " walkers\n";
     profiler.print_table(std::cout);
   } catch (const std::exception& e) {
     std::cerr << "strata view: " << e.what() << "\n";
@@ -161,6 +185,7 @@ void add_view_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--height", o->height, "Window height")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Quit after F frames (0 = run until closed)")->capture_default_str();
   cmd->add_flag("--hidden", o->hidden, "Create the window hidden (smoke tests under Xvfb)");
+  cmd->add_flag("--no-panel", o->no_panel, "Hide the control panel (crowd, levels, gait, muscles, timings)");
   cmd->add_flag("--skeleton-overlay", o->skeleton_overlay, "Draw the skeletons too when bodies are drawn");
   cmd->add_option("--screenshot-dir", o->screenshot_dir, "Where S saves PNG screenshots")->capture_default_str();
   cmd->callback([o, &exit_code] { exit_code = run_view(*o); });

@@ -50,6 +50,7 @@ struct GlfwWindow::Impl {
   WindowInput pending;
   glm::dvec2 last_cursor{0.0};
   bool have_cursor = false;
+  bool ui_mouse = false, ui_keyboard = false;  // set_ui_capture
 
   static Impl& of(GLFWwindow* w) { return *static_cast<Impl*>(glfwGetWindowUserPointer(w)); }
 
@@ -57,7 +58,7 @@ struct GlfwWindow::Impl {
     Impl& self = of(w);
     const glm::dvec2 pos{x, y};
     // The first event after creation has no predecessor; a jump from (0,0) would spin the camera.
-    if (self.have_cursor) {
+    if (self.have_cursor && !self.ui_mouse) {
       const glm::vec2 delta{pos - self.last_cursor};
       if (glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
         self.pending.orbit_drag += delta;
@@ -69,11 +70,23 @@ struct GlfwWindow::Impl {
     self.have_cursor = true;
   }
 
-  static void on_scroll(GLFWwindow* w, double, double y) { of(w).pending.scroll += static_cast<float>(y); }
+  static void on_scroll(GLFWwindow* w, double, double y) {
+    if (!of(w).ui_mouse) of(w).pending.scroll += static_cast<float>(y);
+  }
+
+  static void on_mouse_button(GLFWwindow* w, int button, int action, int) {
+    Impl& self = of(w);
+    if (button != GLFW_MOUSE_BUTTON_LEFT) return;
+    // A release always counts (a drag that started in the scene ends even over the panel); a press only when
+    // the UI does not want it.
+    if (action == GLFW_RELEASE) self.pending.left_released = true;
+    else if (!self.ui_mouse) self.pending.left_pressed = true;
+  }
 
   static void on_key(GLFWwindow* w, int key, int, int action, int) {
     if (action == GLFW_RELEASE) return;
     Impl& self = of(w);
+    if (self.ui_keyboard) return;
     const bool press = action == GLFW_PRESS;  // repeats only step
     switch (key) {
       case GLFW_KEY_SPACE:
@@ -128,6 +141,7 @@ GlfwWindow::GlfwWindow(const WindowOptions& options) : impl_(std::make_unique<Im
   glfwSetWindowUserPointer(window, impl_.get());
   glfwSetCursorPosCallback(window, Impl::on_cursor);
   glfwSetScrollCallback(window, Impl::on_scroll);
+  glfwSetMouseButtonCallback(window, Impl::on_mouse_button);
   glfwSetKeyCallback(window, Impl::on_key);
   glfwSetFramebufferSizeCallback(window, Impl::on_framebuffer_size);
   make_current();
@@ -148,9 +162,24 @@ WindowInput GlfwWindow::poll_events() {
   glfwPollEvents();
   WindowInput out = impl_->pending;
   impl_->pending = {};
-  if (glfwWindowShouldClose(impl_->window)) out.quit = true;
+  GLFWwindow* w = impl_->window;
+  if (glfwWindowShouldClose(w)) out.quit = true;
+  double x = 0.0, y = 0.0;
+  glfwGetCursorPos(w, &x, &y);
+  out.cursor = {static_cast<float>(x), static_cast<float>(y)};
+  out.left_down = glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+  out.shift = glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+  out.ctrl = glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+  out.alt = glfwGetKey(w, GLFW_KEY_LEFT_ALT) == GLFW_PRESS || glfwGetKey(w, GLFW_KEY_RIGHT_ALT) == GLFW_PRESS;
   return out;
 }
+
+void GlfwWindow::set_ui_capture(bool mouse, bool keyboard) {
+  impl_->ui_mouse = mouse;
+  impl_->ui_keyboard = keyboard;
+}
+
+void* GlfwWindow::native_handle() const { return impl_->window; }
 
 bool GlfwWindow::should_close() const { return glfwWindowShouldClose(impl_->window) == GLFW_TRUE; }
 void GlfwWindow::request_close() { glfwSetWindowShouldClose(impl_->window, GLFW_TRUE); }

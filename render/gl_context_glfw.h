@@ -35,6 +35,13 @@ struct WindowInput {
   int level_steps = 0;          // L presses: next body level (0, 1, 2, S1, S2, S3, back to 0)
   bool quit = false;            // Esc, Q or the window's close button
   bool resized = false;         // framebuffer size changed
+  // The mouse as the binding editor needs it (window coordinates, y down). Presses and releases that the UI
+  // captured are not reported.
+  glm::vec2 cursor{0.0f};
+  bool left_down = false;       // left button held now
+  bool left_pressed = false;    // pressed since the previous poll
+  bool left_released = false;   // released since the previous poll
+  bool shift = false, ctrl = false, alt = false;  // modifiers held now
 };
 
 class GlfwWindow final : public GlContext {
@@ -54,6 +61,13 @@ class GlfwWindow final : public GlContext {
   void request_close();
   glm::ivec2 framebuffer_size() const;  // pixels; differs from window_size on HiDPI screens
   glm::ivec2 window_size() const;       // screen coordinates, the unit of WindowInput's drags
+  // While the UI drawn over the scene (the viewer's Dear ImGui panel) wants the mouse or the keyboard, the
+  // window stops turning those events into camera drags and shortcuts; the app sets this once per frame from the
+  // UI's own verdict. Filtering here rather than in the app keeps a drag that started on a slider from also
+  // orbiting the camera.
+  void set_ui_capture(bool mouse, bool keyboard);
+  // The GLFWwindow*, for a UI backend that attaches its own callbacks (they chain to this window's).
+  void* native_handle() const;
 
  private:
   struct Impl;

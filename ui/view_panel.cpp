@@ -1,0 +1,230 @@
+#include "ui/view_panel.h"
+
+#include <imgui.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <stdexcept>
+
+#include "components/body.h"
+#include "profiling/profiler.h"
+#include "systems/frame_script.h"
+
+namespace strata {
+
+TimingHistory::TimingHistory(std::size_t capacity) : capacity_(std::max<std::size_t>(capacity, 2)) {}
+
+void TimingHistory::push(const Profiler& profiler) {
+  for (const SystemStats& s : profiler.stats()) {
+    auto it = std::find_if(series_.begin(), series_.end(), [&](const Series& x) { return x.name == s.name; });
+    if (it == series_.end()) {
+      series_.push_back(Series{s.name, {}, 0.0, 0.0});
+      it = series_.end() - 1;
+    }
+    // A ring would save the erase, but ImGui::PlotLines wants contiguous values and 240 floats move in
+    // nanoseconds; the vector keeps the chart code trivial.
+    if (it->ms.size() == capacity_) it->ms.erase(it->ms.begin());
+    it->ms.push_back(static_cast<float>(s.last_ms));
+    it->mean_ms = s.mean_ms;
+    it->p95_ms = s.p95_ms;
+  }
+}
+
+glm::vec2 UiProbe::centre(const std::string& label) const {
+  const auto& r = rects.at(label);
+  return 0.5f * (r[0] + r[1]);
+}
+
+std::vector<int> selectable_body_levels(const CrowdScene& scene) {
+  std::vector<int> levels;
+  const Body* body = scene.rig().body.get();
+  if (!body || body->levels.empty()) return levels;
+  for (std::size_t l = 0; l < body->levels.size(); ++l) levels.push_back(static_cast<int>(l));
+  levels.push_back(kAutoBodyLevel);
+  if (body->cage)
+    for (int d = 1; d <= kMaxSubdivDepth; ++d) levels.push_back(subdiv_level(d));
+  return levels;
+}
+
+namespace {
+
+void note(UiProbe* probe, const std::string& label) {
+  if (!probe) return;
+  const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
+  probe->rects[label] = {glm::vec2(a.x, a.y), glm::vec2(b.x, b.y)};
+}
+
+std::string level_label(const CrowdScene& scene, int level) {
+  const Body* body = scene.rig().body.get();
+  std::string label = body_level_name(level);
+  if (level >= 0 && level < kAutoBodyLevel && body && static_cast<std::size_t>(level) < body->levels.size()) {
+    label += " (" + std::to_string(body->levels[static_cast<std::size_t>(level)].mesh.vertex_count()) + " v)";
+  } else if (level == kAutoBodyLevel) {
+    label += " (by size on screen)";
+  } else if (is_subdiv_level(level)) {
+    label += " (cage refined " + std::to_string(subdiv_depth(level)) + "x)";
+  }
+  return label;
+}
+
+void playback_section(ViewPanelState& s, UiProbe* probe) {
+  if (ImGui::Button(s.paused ? "Resume" : "Pause", ImVec2(80, 0))) s.paused = !s.paused;
+  note(probe, "Pause");
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!s.paused);
+  if (ImGui::Button("Step", ImVec2(60, 0))) ++s.step_requests;
+  note(probe, "Step");
+  ImGui::EndDisabled();
+  ImGui::SameLine();
+  if (ImGui::Button("Screenshot")) s.screenshot_requested = true;
+  note(probe, "Screenshot");
+  ImGui::SliderFloat("time scale", &s.time_scale, 0.0f, 3.0f, "%.2fx");
+  note(probe, "time scale");
+  if (ImGui::Button("Frame crowd")) s.frame_camera_requested = true;
+  note(probe, "Frame crowd");
+  ImGui::SameLine();
+  ImGui::Checkbox("skeletons", &s.show_skeleton);
+  note(probe, "skeletons");
+}
+
+void crowd_section(CrowdScene& scene, ViewPanelState& s, UiProbe* probe) {
+  ImGui::Text("%zu walkers, %zu triangles drawn", scene.walker_count(), s.triangles_drawn);
+  ImGui::InputInt("walkers", &s.walkers, 1, 25);
+  note(probe, "walkers");
+  s.walkers = std::clamp(s.walkers, 1, 100000);
+  ImGui::InputInt("seed", &s.seed);
+  note(probe, "seed");
+  s.seed = std::max(s.seed, 0);
+  if (ImGui::Button("New crowd")) s.rebuild_requested = true;
+  note(probe, "New crowd");
+}
+
+void level_section(CrowdScene& scene, UiProbe* probe) {
+  const std::vector<int> levels = selectable_body_levels(scene);
+  if (levels.empty()) {
+    ImGui::TextDisabled("no body (skeletons only)");
+    return;
+  }
+  const int current = scene.body_level();
+  if (ImGui::BeginCombo("level", level_label(scene, current).c_str())) {
+    for (int level : levels) {
+      const bool selected = level == current;
+      if (ImGui::Selectable(level_label(scene, level).c_str(), selected) && !selected) scene.set_body_level(level);
+      note(probe, "level:" + body_level_name(level));
+      if (selected) ImGui::SetItemDefaultFocus();
+    }
+    ImGui::EndCombo();
+  }
+  note(probe, "level");
+  LodPolicy& policy = scene.lod_policy();
+  ImGui::BeginDisabled(current != kAutoBodyLevel);
+  ImGui::SliderFloat("level 0 above", &policy.level0_px, 50.0f, 1000.0f, "%.0f px");
+  note(probe, "level 0 above");
+  ImGui::SliderFloat("level 1 above", &policy.level1_px, 20.0f, 600.0f, "%.0f px");
+  note(probe, "level 1 above");
+  ImGui::SliderFloat("hysteresis", &policy.hysteresis, 1.0f, 2.0f, "%.2f");
+  note(probe, "hysteresis");
+  policy.level1_px = std::min(policy.level1_px, policy.level0_px);
+  ImGui::EndDisabled();
+  const auto counts = scene.lod_counts();
+  ImGui::Text("skinned at 0/1/2: %zu / %zu / %zu, culled %zu", counts[0], counts[1], counts[2], counts[3]);
+}
+
+void gait_section(CrowdScene& scene, UiProbe* probe) {
+  if (scene.motion() != MotionSource::Walk) {
+    ImGui::TextDisabled("the walkers play clips; gait applies to the walk generator");
+    return;
+  }
+  GaitStyle& g = scene.style();
+  // Ranges: about twice each default either way, within what the IK limits can still follow.
+  ImGui::SliderFloat("pelvis yaw", &g.pelvis_yaw, 0.0f, 0.2f, "%.3f rad");
+  note(probe, "pelvis yaw");
+  ImGui::SliderFloat("pelvis list", &g.pelvis_tilt, 0.0f, 0.2f, "%.3f rad");
+  ImGui::SliderFloat("lateral sway", &g.lateral_sway, 0.0f, 0.06f, "%.3f m");
+  ImGui::SliderFloat("anterior tilt", &g.pelvis_anterior_tilt, 0.0f, 0.3f, "%.3f rad");
+  ImGui::SliderFloat("knee drop", &g.nominal_drop, 0.0f, 0.06f, "%.3f m");
+  ImGui::SliderFloat("footprint lead", &g.footprint_lead, 0.3f, 0.9f, "%.2f steps");
+  ImGui::SliderFloat("heel off", &g.heel_off, 0.1f, 0.7f, "%.2f of stance");
+  ImGui::SliderFloat("toe-off pitch", &g.toe_off_pitch, 0.0f, 1.3f, "%.2f rad");
+  ImGui::SliderFloat("swing clearance", &g.swing_clearance, 0.0f, 0.15f, "%.3f m");
+  ImGui::SliderFloat("arm swing", &g.arm_swing, 0.0f, 0.4f, "%.3f m");
+  note(probe, "arm swing");
+  if (ImGui::Button("Default gait")) g = GaitStyle{};
+  note(probe, "Default gait");
+}
+
+void muscle_section(CrowdScene& scene, UiProbe* probe) {
+  if (!scene.has_muscles()) {
+    ImGui::TextDisabled("this rig has no muscle layer");
+    return;
+  }
+  bool on = scene.muscles_enabled();
+  if (ImGui::Checkbox("muscles on", &on)) scene.set_muscles_enabled(on);
+  note(probe, "muscles on");
+  const MuscleSet& set = scene.rig().muscles->set;
+  MuscleGains gains = scene.muscle_gains();
+  bool changed = false;
+  changed |= ImGui::SliderFloat("all muscles", &gains.global, 0.0f, 5.0f, "%.2fx");
+  note(probe, "all muscles");
+  if (gains.line.size() != set.lines.size()) gains.line.resize(set.lines.size(), 1.0f);
+  for (std::size_t m = 0; m < set.lines.size(); ++m)
+    changed |= ImGui::SliderFloat(set.lines[m].name.c_str(), &gains.line[m], 0.0f, 5.0f, "%.2fx");
+  if (ImGui::Button("Reset gains")) {
+    gains = MuscleGains{};
+    changed = true;
+  }
+  note(probe, "Reset gains");
+  // Only a change goes to the scene: set_muscle_gains re-derives the per-vertex coefficients.
+  if (changed) scene.set_muscle_gains(std::move(gains));
+}
+
+void timing_section(const ViewPanelState& s) {
+  ImGui::Text("%.1f fps", static_cast<double>(s.fps));
+  for (const TimingHistory::Series& series : s.timings.series()) {
+    if (series.ms.empty()) continue;
+    const float peak = *std::max_element(series.ms.begin(), series.ms.end());
+    char overlay[96];
+    std::snprintf(overlay, sizeof overlay, "%s  %.2f ms (mean %.2f, p95 %.2f)", series.name.c_str(),
+                  static_cast<double>(series.ms.back()), series.mean_ms, series.p95_ms);
+    ImGui::PushID(series.name.c_str());
+    // Each system on its own scale: a 0.2 ms system would be a flat line on the frame's 20 ms axis.
+    ImGui::PlotLines("", series.ms.data(), static_cast<int>(series.ms.size()), 0, overlay, 0.0f,
+                     std::max(peak * 1.1f, 0.01f), ImVec2(320.0f, 36.0f));
+    ImGui::PopID();
+  }
+}
+
+}  // namespace
+
+void draw_view_panel(CrowdScene& scene, ViewPanelState& state, UiProbe* probe) {
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  // Auto-resized to the open tab: every tab fits a 720p window, so nothing needs scrolling, and a tab is one
+  // concern (a long page of collapsing headers outgrew the screen once the muscle sliders were open).
+  ImGui::Begin("Strata", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+  ImGui::PushItemWidth(180.0f);
+  playback_section(state, probe);
+  if (ImGui::BeginTabBar("sections")) {
+    const auto tab = [&](const char* name, auto&& body) {
+      const bool open = ImGui::BeginTabItem(name);
+      note(probe, std::string("tab:") + name);
+      if (open) {
+        body();
+        ImGui::EndTabItem();
+      }
+    };
+    tab("Crowd", [&] {
+      crowd_section(scene, state, probe);
+      ImGui::Separator();
+      level_section(scene, probe);
+    });
+    tab("Gait", [&] { gait_section(scene, probe); });
+    tab("Muscles", [&] { muscle_section(scene, probe); });
+    tab("Timings", [&] { timing_section(state); });
+    ImGui::EndTabBar();
+  }
+  if (!state.last_message.empty()) ImGui::TextWrapped("%s", state.last_message.c_str());
+  ImGui::PopItemWidth();
+  ImGui::End();
+}
+
+}  // namespace strata

@@ -1,0 +1,74 @@
+#pragma once
+// The control panel of `strata view` (Dear ImGui, immediate mode): crowd size, level policy, gait, muscle
+// gains, a live per-system timing chart, pause/step, screenshot. Changes that the scene can take at run time
+// (level, level-of-detail policy, gait style, muscle gains) go straight into the CrowdScene; those that need the
+// app (a new crowd, a screenshot, stepping, the camera) are requests in ViewPanelState, which the app clears once
+// handled.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <glm/vec2.hpp>
+
+namespace strata {
+
+class CrowdScene;
+class Profiler;
+
+// The last `capacity` frames of every profiled system's time (ms), for the chart. Fed once per frame after
+// Profiler::end_frame from its rolling statistics' last sample.
+class TimingHistory {
+ public:
+  explicit TimingHistory(std::size_t capacity = 240);
+  void push(const Profiler& profiler);
+  struct Series {
+    std::string name;
+    std::vector<float> ms;  // oldest first, at most capacity
+    double mean_ms = 0.0, p95_ms = 0.0;
+  };
+  const std::vector<Series>& series() const { return series_; }
+  std::size_t capacity() const { return capacity_; }
+
+ private:
+  std::size_t capacity_;
+  std::vector<Series> series_;
+};
+
+// Where the panel's named widgets were drawn in the last frame (window coordinates), for scripted input: tests
+// click "Pause" by its rectangle instead of by a hard-coded pixel that a font or style change would move.
+struct UiProbe {
+  std::map<std::string, std::array<glm::vec2, 2>> rects;  // label -> {min, max}
+  glm::vec2 centre(const std::string& label) const;       // throws std::out_of_range for an unknown label
+};
+
+struct ViewPanelState {
+  // Playback.
+  bool paused = false;
+  int step_requests = 0;          // single steps asked for while paused
+  float time_scale = 1.0f;        // simulation seconds per real second
+  bool screenshot_requested = false;
+  bool frame_camera_requested = false;
+  bool show_skeleton = false;
+  // Crowd: a new crowd of `walkers` with `seed` when rebuild_requested.
+  int walkers = 25;
+  int seed = 1;
+  bool rebuild_requested = false;
+  // What the app reports back for display.
+  std::size_t triangles_drawn = 0;
+  float fps = 0.0f;
+  std::string last_message;       // e.g. "saved out/view/screenshot_000.png"
+  TimingHistory timings;
+};
+
+// Draws the panel for this frame (between ImGuiLayer::begin_frame and render). `probe`, when given, records
+// the widgets' rectangles.
+void draw_view_panel(CrowdScene& scene, ViewPanelState& state, UiProbe* probe = nullptr);
+
+// The body levels a scene can show, in the order the panel and the L key cycle them: its meshes, auto, and
+// S1..S3 when the body has a subdivision cage. Empty without a body.
+std::vector<int> selectable_body_levels(const CrowdScene& scene);
+
+}  // namespace strata
