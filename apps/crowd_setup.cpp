@@ -16,6 +16,8 @@
 #include "io/makehuman.h"
 #include "io/load_error.h"
 #include "io/muscle_file.h"
+#include "rig/binding.h"
+#include "rig/body_generator.h"
 #include "rig/body_rig.h"
 #include "rig/muscle_binding.h"
 #include "rig/skin_from_skeleton.h"
@@ -66,6 +68,9 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
       ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));
   cmd.add_option("--muscle-overrides", o.muscle_overrides,
                  "JSON file of per-muscle gains, e.g. {\"gain\": 1, \"muscles\": {\"l_biceps\": 2}}");
+  cmd.add_option("--binding-overrides", o.binding_overrides,
+                 "Skin binding overrides file (format: data/binding_overrides.json; e.g. saved by the binding "
+                 "editor) used instead of the shipped one to bind the shipped body's levels and cage");
 }
 
 namespace {
@@ -129,14 +134,24 @@ Rig load_mesh_rig(const std::string& path) {
 }
 
 std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
+  if (!o.binding_overrides.empty() && (!o.mesh.empty() || !o.skeleton.empty()))
+    throw std::invalid_argument("--binding-overrides rebinds the shipped body; it cannot go with --mesh or --skeleton");
   Rig rig;
   if (!o.mesh.empty()) {
     rig = load_mesh_rig(o.mesh);
   } else {
     rig = to_rig(o.skeleton.empty() ? load_default_humanoid() : load_humanoid_file(o.skeleton));
     // The shipped skeleton comes with the shipped body; an X3D skeleton with a skin brings its own.
+    // Loaded even without a body to draw, so a bad file fails the same way at every --level.
+    const std::optional<BindingTables> tables =
+        o.binding_overrides.empty()
+            ? std::nullopt
+            : std::optional(load_binding_overrides_file(o.binding_overrides, default_binding_tables()));
     if (o.level >= 0) {
-      if (o.skeleton.empty()) {
+      if (tables) {
+        rig.body = bind_body(default_body().levels, rig.skeleton, BindingMethod::ThreeStep, &default_body().cage,
+                             &*tables);
+      } else if (o.skeleton.empty()) {
         rig.body = default_bound_body();
       } else if (std::optional<BodyLevel> skin = skin_from_skeleton(rig.skeleton)) {
         rig.body = std::make_shared<const Body>(Body{{std::move(*skin)}});

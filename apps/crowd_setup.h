@@ -29,10 +29,11 @@ struct SceneOptions {
   std::string muscles = "default";  // "default" (data/muscles.json), "none", or a muscle file
   float muscle_gain = 1.0f;         // scales every muscle's forces
   std::string muscle_overrides;     // per-muscle gains file (io/muscle_file.h)
+  std::string binding_overrides;    // step-3 overrides file replacing the shipped ones (shipped body only)
 };
 
 // Registers --walkers, --skeleton, --clip, --rest, --seed, --spacing, --threads, --level and the muscle options
-// (--muscles, --muscle-gain, --muscle-overrides) on `cmd`.
+// (--muscles, --muscle-gain, --muscle-overrides) and --binding-overrides on `cmd`.
 void add_scene_options(CLI::App& cmd, SceneOptions& options);
 
 // Resolves --clip to a walker clip selector: a clip name or index, "all" (every clip at once, as an X3D browser

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <stdexcept>
 #include <unordered_set>
@@ -116,7 +119,8 @@ SkinSelection parse_selection(const Json& e, const std::string& source, std::siz
   } else {
     s.name = "overrides[" + std::to_string(index) + "]";
   }
-  check_keys(e, {"name", "vertices", "sphere", "box", "parts", "joints", "blend", "falloff_m"}, where);
+  check_keys(e, {"name", "vertices", "mesh_vertices", "sphere", "box", "parts", "joints", "blend", "falloff_m"},
+             where);
   const int kinds = int(e.contains("vertices")) + int(e.contains("sphere")) + int(e.contains("box"));
   if (kinds != 1) throw LoadError(where + ": needs exactly one of 'vertices', 'sphere', 'box'");
   if (e.contains("vertices")) {
@@ -129,6 +133,15 @@ SkinSelection parse_selection(const Json& e, const std::string& source, std::siz
         throw LoadError(where + ": 'vertices' must hold non-negative integer ids");
       s.vertices.push_back(static_cast<std::uint32_t>(id.get<std::int64_t>()));
     }
+    if (e.contains("mesh_vertices")) {
+      const Json& n = e["mesh_vertices"];
+      if (!n.is_number_integer() || n.get<std::int64_t>() < 0 ||
+          n.get<std::int64_t>() > std::numeric_limits<std::uint32_t>::max())
+        throw LoadError(where + ": 'mesh_vertices' must be a non-negative integer (a vertex count)");
+      s.mesh_vertices = static_cast<std::uint32_t>(n.get<std::int64_t>());
+    }
+  } else if (e.contains("mesh_vertices")) {
+    throw LoadError(where + ": 'mesh_vertices' is only valid with 'vertices'");
   } else if (e.contains("sphere")) {
     s.kind = SkinSelection::Kind::Sphere;
     const Json& sp = e["sphere"];
@@ -231,7 +244,11 @@ double selection_strength(const SkinSelection& s, const glm::vec3& p) {
   return smoothstep01(inside / s.falloff_m);
 }
 
+}  // namespace
+
 void apply_selection(const SkinSelection& s, const Mesh& mesh, const Skeleton& skeleton, SkinBinding& binding) {
+  if (s.kind == SkinSelection::Kind::Vertices && s.mesh_vertices != 0 && s.mesh_vertices != mesh.vertex_count())
+    return;  // ids of another mesh (level) of the body
   std::vector<int> candidates;
   if (s.joints.empty()) {
     for (std::size_t j = 0; j < skeleton.joint_count(); ++j) candidates.push_back(static_cast<int>(j));
@@ -293,6 +310,8 @@ void apply_selection(const SkinSelection& s, const Mesh& mesh, const Skeleton& s
     for (std::size_t v = 0; v < mesh.vertex_count(); ++v) rebind(v, selection_strength(s, mesh.positions[v]));
   }
 }
+
+namespace {
 
 // Step 2 for one joint and its parent: vertices bound to either alone and within radius of the joint blend the
 // two.
@@ -381,6 +400,120 @@ const BindingTables& default_binding_tables() {
     return load_binding_tables(*parts, *overrides, "<embedded>/data/part_joints.json",
                                "<embedded>/data/binding_overrides.json");
   }();
+  return tables;
+}
+
+namespace {
+
+using OrderedJson = nlohmann::ordered_json;  // keys in the order a reader expects (name first), not sorted
+
+// The shortest decimal that reads back as `f` ("0.94", not the double 0.9399999976158142), as a JSON number. The
+// loader parses a double and narrows it to float; when that double rounding could land elsewhere (rare), the
+// exact double value of f is written instead, so a round trip is always exact.
+OrderedJson float_json(float f) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, f).ptr;
+  double d = 0.0;
+  std::from_chars(text, end, d);
+  return static_cast<float>(d) == f ? d : static_cast<double>(f);
+}
+
+OrderedJson vec3_json(const glm::vec3& v) { return OrderedJson::array({float_json(v.x), float_json(v.y), float_json(v.z)}); }
+
+// Two-space indentation like nlohmann's dump(2), except that arrays of numbers and strings fill lines up to
+// `kWidth` columns: dump(2) puts each of an edit's hundreds of vertex ids on its own line.
+void write_pretty(const OrderedJson& j, std::size_t indent, std::string& out) {
+  constexpr std::size_t kWidth = 110;
+  const std::string pad(indent + 2, ' ');
+  if (j.is_object() && !j.empty()) {
+    out += "{\n";
+    std::size_t i = 0;
+    for (const auto& [key, value] : j.items()) {
+      out += pad + OrderedJson(key).dump() + ": ";
+      write_pretty(value, indent + 2, out);
+      out += ++i < j.size() ? ",\n" : "\n";
+    }
+    out += std::string(indent, ' ') + "}";
+  } else if (j.is_array() && !j.empty()) {
+    const bool flat = std::none_of(j.begin(), j.end(), [](const OrderedJson& e) { return e.is_structured(); });
+    if (flat) {
+      std::string line = "[";
+      for (std::size_t i = 0; i < j.size(); ++i) line += (i ? ", " : "") + j[i].dump();
+      const std::size_t column = out.size() - std::min(out.size(), out.rfind('\n') + 1);
+      if (column + line.size() + 1 <= kWidth) {
+        out += line + "]";
+        return;
+      }
+    }
+    out += "[\n" + pad;
+    std::size_t column = pad.size();
+    for (std::size_t i = 0; i < j.size(); ++i) {
+      std::string item;
+      if (flat) {
+        item = j[i].dump();
+      } else {
+        write_pretty(j[i], indent + 2, item);
+      }
+      if (i > 0 && (!flat || column + 2 + item.size() > kWidth)) {
+        out += ",\n" + pad;
+        column = pad.size();
+      } else if (i > 0) {
+        out += ", ";
+        column += 2;
+      }
+      out += item;
+      column += item.size();
+    }
+    out += "\n" + std::string(indent, ' ') + "]";
+  } else {
+    out += j.dump();
+  }
+}
+
+}  // namespace
+
+std::string binding_overrides_json(std::span<const SkinSelection> overrides) {
+  OrderedJson list = OrderedJson::array();
+  for (const SkinSelection& s : overrides) {
+    OrderedJson e;
+    e["name"] = s.name;
+    switch (s.kind) {
+      case SkinSelection::Kind::Vertices:
+        e["vertices"] = s.vertices;
+        if (s.mesh_vertices != 0) e["mesh_vertices"] = s.mesh_vertices;
+        break;
+      case SkinSelection::Kind::Sphere:
+        e["sphere"] = {{"center", vec3_json(s.center)}, {"radius", float_json(s.radius)}};
+        break;
+      case SkinSelection::Kind::Box:
+        e["box"] = {{"min", vec3_json(s.box_min)}, {"max", vec3_json(s.box_max)}};
+        break;
+    }
+    if (!s.parts.empty()) e["parts"] = s.parts;
+    if (!s.joints.empty()) e["joints"] = s.joints;
+    e["blend"] = s.blend == SkinSelection::Blend::NearestTwo ? "nearest_two" : "parent";
+    e["falloff_m"] = float_json(s.falloff_m);
+    list.push_back(std::move(e));
+  }
+  OrderedJson root;
+  root["_doc"] = {"Step-3 skin binding overrides, applied in order after the part table (steps 1-2).",
+                  "Format and meaning of every field: the _doc of data/binding_overrides.json."};
+  root["overrides"] = std::move(list);
+  std::string out;
+  write_pretty(root, 0, out);
+  return out + "\n";
+}
+
+BindingTables load_binding_overrides_file(const std::filesystem::path& path, const BindingTables& base) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw LoadError(path.string() + ": cannot open file");
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (in.bad()) throw LoadError(path.string() + ": read error");
+  // load_binding_tables takes empty text as "no entries"; an empty file named on purpose is a mistake instead.
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw LoadError(path.string() + ": empty file (expected {\"overrides\": [...]})");
+  BindingTables tables = load_binding_tables("", text, "", path.string());
+  tables.part_joints = base.part_joints;
   return tables;
 }
 

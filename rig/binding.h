@@ -12,6 +12,8 @@
 //   bind_automatic   bone heat (Baran & Popovic 2007): per joint, a heat-diffusion solve over the surface gives
 //     smooth weights with no table and no manual step.
 #include <cstdint>
+#include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -31,6 +33,10 @@ struct SkinSelection {
   std::string name;
   Kind kind = Kind::Vertices;
   std::vector<std::uint32_t> vertices;  // Kind::Vertices
+  // Kind::Vertices: 0 = the ids fit any mesh; N > 0 = they belong to a mesh of N vertices, and the entry is
+  // skipped for a mesh of another count. One overrides file serves every level of a body (the shipped body has
+  // three levels and a cage, all of different counts), and an id list of one level means nothing on another.
+  std::uint32_t mesh_vertices = 0;
   glm::vec3 center{0.0f};               // Kind::Sphere
   float radius = 0.0f;                  // Kind::Sphere
   glm::vec3 box_min{0.0f};              // Kind::Box
@@ -55,6 +61,14 @@ struct BindingTables {
 BindingTables load_binding_tables(std::string_view part_joints_json, std::string_view overrides_json,
                                   std::string_view part_joints_source = "part_joints.json",
                                   std::string_view overrides_source = "binding_overrides.json");
+// The inverse of the overrides half of load_binding_tables: a pretty-printed {"_doc": ..., "overrides": [...]}
+// that loads back to the same selections field by field (floats are written so they parse to the same float).
+std::string binding_overrides_json(std::span<const SkinSelection> overrides);
+
+// `base`'s part table with the overrides of the file at `path` in place of base's overrides (`strata crowd
+// --binding-overrides`, the binding editor's saved files). Throws LoadError naming the file (and the entry).
+BindingTables load_binding_overrides_file(const std::filesystem::path& path, const BindingTables& base);
+
 // The shipped tables (data/part_joints.json, data/binding_overrides.json, embedded), parsed once. Throws LoadError
 // when the build did not embed them (STRATA_EMBEDDED_FILES).
 const BindingTables& default_binding_tables();
@@ -98,6 +112,13 @@ BindingStats binding_stats(const SkinBinding& binding);
 // the skeleton lacks are errors for step 1 and skipped for steps 2 and 3 (an optional refinement).
 SkinBinding bind_three_step(const Mesh& mesh, const Skeleton& skeleton, const BindingTables& tables,
                             const BindingOptions& options = {});
+
+// Step 3 for one selection, exactly as bind_three_step applies each override: the selected vertices (of the
+// selection's parts) are re-bound to their closest candidate joint and its parent (or the nearest two), with
+// inverse-distance weights, faded into the previous binding by falloff_m. A Kind::Vertices selection whose
+// mesh_vertices names another vertex count is skipped; an id out of range of a matching mesh throws
+// std::invalid_argument naming the selection.
+void apply_selection(const SkinSelection& s, const Mesh& mesh, const Skeleton& skeleton, SkinBinding& binding);
 
 struct AutoBindOptions {
   // Heat strength c of Baran & Popovic's H = c / d^2. 1 is their value: the blend region then scales with the

@@ -9,13 +9,16 @@
 namespace strata {
 
 std::shared_ptr<const Body> bind_body(std::span<const Mesh> levels, const Skeleton& skeleton, BindingMethod method,
-                                      const Mesh* cage) {
+                                      const Mesh* cage, const BindingTables* tables) {
+  // Looked up only for the three steps: the automatic binder needs no tables, even in a build without them.
+  const BindingTables* three_step_tables =
+      method == BindingMethod::ThreeStep ? (tables ? tables : &default_binding_tables()) : nullptr;
   auto bind = [&](const Mesh& mesh) {
     BodyLevel level;
     level.mesh = mesh;
     if (level.mesh.normals.size() != level.mesh.positions.size()) compute_normals(level.mesh);
     level.binding = method == BindingMethod::ThreeStep
-                        ? bind_three_step(level.mesh, skeleton, default_binding_tables())
+                        ? bind_three_step(level.mesh, skeleton, *three_step_tables)
                         : bind_automatic(level.mesh, skeleton);
     return level;
   };

@@ -10,10 +10,14 @@ namespace strata {
 
 enum class BindingMethod { ThreeStep, Automatic };
 
-// Binds each mesh (finest first) with the paper's three steps and the shipped tables (rig/binding.h), or with
-// the automatic bone-heat weights; `cage`, when given, is bound the same way into Body::cage.
+struct BindingTables;  // rig/binding.h
+
+// Binds each mesh (finest first) with the paper's three steps and `tables` (nullptr: the shipped tables,
+// rig/binding.h default_binding_tables), or with the automatic bone-heat weights (tables unused); `cage`, when
+// given, is bound the same way into Body::cage.
 std::shared_ptr<const Body> bind_body(std::span<const Mesh> levels, const Skeleton& skeleton,
-                                      BindingMethod method = BindingMethod::ThreeStep, const Mesh* cage = nullptr);
+                                      BindingMethod method = BindingMethod::ThreeStep, const Mesh* cage = nullptr,
+                                      const BindingTables* tables = nullptr);
 
 // The shipped default body (rig/body_generator.h), its three levels and its subdivision cage, bound to the
 // shipped default skeleton, built once per process.
