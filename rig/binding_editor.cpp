@@ -249,6 +249,10 @@ std::vector<std::uint8_t> visible_vertices(const EditMesh& mesh, const glm::mat4
   check_viewport(viewport);
   check_indices(mesh);
   const glm::dmat4 vp(view_projection);
+  std::vector<std::uint8_t> visible(mesh.positions.size(), 0);
+  const double det = glm::determinant(vp);
+  if (!std::isfinite(det) || det == 0.0) return visible;  // no camera: nothing is seen
+  const glm::dmat4 inverse = glm::inverse(vp);
   DepthBuffer depth(viewport);
   for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
     const glm::dvec4 clip[3] = {to_clip(vp, mesh.positions[mesh.triangles[t]]),
@@ -257,10 +261,6 @@ std::vector<std::uint8_t> visible_vertices(const EditMesh& mesh, const glm::mat4
     if (finite(clip[0]) && finite(clip[1]) && finite(clip[2])) depth.draw(clip);
   }
 
-  std::vector<std::uint8_t> visible(mesh.positions.size(), 0);
-  const double det = glm::determinant(vp);
-  if (!std::isfinite(det) || det == 0.0) return visible;  // no camera: nothing is seen
-  const glm::dmat4 inverse = glm::inverse(vp);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
     const std::optional<glm::dvec3> s = on_screen(vp, mesh.positions[v], viewport);
     if (!s) continue;
