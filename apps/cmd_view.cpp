@@ -87,6 +87,10 @@ int run_view(const ViewOptions& o) {
       panel.step_requests += input.single_steps;
       panel.screenshot_requested |= input.screenshot;
       if (session.apply_crowd_request()) framed = false;
+      session.apply_binding_requests();
+      const bool editing = panel.binding.active;
+      // Editing: the left button selects; Alt+left still orbits.
+      if (editing && !input.alt) input.orbit_drag = glm::vec2(0.0f);
       CrowdScene& scene = session.scene();
       if (input.level_steps > 0 && scene.body_level() >= 0) {
         const std::vector<int> levels = selectable_body_levels(scene);
@@ -123,7 +127,23 @@ int run_view(const ViewOptions& o) {
           panel.frame_camera_requested = false;
         }
         SkeletonDrawInput draw{&scene.rig().skeleton, joints, scene.walker_count()};
-        const std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
+        std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
+        if (editing) {
+          // The mouse in framebuffer pixels (they differ from window units on HiDPI screens).
+          const glm::ivec2 ws = window.window_size();
+          const glm::vec2 scale{ws.x > 0 ? static_cast<float>(fb.x) / static_cast<float>(ws.x) : 1.0f,
+                                ws.y > 0 ? static_cast<float>(fb.y) / static_cast<float>(ws.y) : 1.0f};
+          EditorMouse mouse;
+          mouse.cursor = input.cursor * scale;
+          mouse.pressed = input.left_pressed && !input.alt;
+          mouse.released = input.left_released;
+          mouse.down = input.left_down;
+          mouse.shift = input.shift;
+          mouse.ctrl = input.ctrl;
+          session.binding_mouse(mouse, camera.projection(aspect) * camera.view(), fb);
+          panel.binding.pixels_per_unit = scale;  // the outline is drawn in window units
+          session.colour_draws(bodies);
+        }
         renderer.options().draw_skeleton = bodies.empty() || panel.show_skeleton;
         renderer.render(draw, camera.view(), camera.projection(aspect), bodies);
         panel.triangles_drawn = renderer.triangles_drawn();

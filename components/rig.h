@@ -36,6 +36,11 @@ class RigLibrary {
     return *rigs_[id];
   }
   std::shared_ptr<const Rig> share(RigId id) const { return rigs_.at(id); }
+  // Swaps rig `id` for `rig` (an edited copy): whoever shares the old one keeps it alive and unchanged.
+  void replace(RigId id, Rig rig) {
+    if (id >= rigs_.size()) throw std::out_of_range("RigLibrary: no rig " + std::to_string(id));
+    rigs_[id] = std::make_shared<const Rig>(std::move(rig));
+  }
   std::size_t size() const { return rigs_.size(); }
 
  private:

@@ -148,6 +148,7 @@ uniform mat4 u_view;
 uniform mat4 u_projection;
 out vec3 v_normal;
 out vec3 v_position;
+out vec4 v_tint;
 void main() {
   vec4 p = vec4(a_position, 1.0);
   vec3 world = vec3(dot(a_row0, p), dot(a_row1, p), dot(a_row2, p));
@@ -160,6 +161,7 @@ void main() {
   vec4 view_position = u_view * vec4(world, 1.0);
   v_position = view_position.xyz;
   v_normal = mat3(u_view) * n;  // the view is rigid
+  v_tint = vec4(0.0);
   gl_Position = u_projection * view_position;
 }
 )";
@@ -167,6 +169,7 @@ void main() {
 constexpr const char* kMeshFragmentShader = R"(#version 450 core
 in vec3 v_normal;
 in vec3 v_position;
+in vec4 v_tint;  // a per-vertex colour blended over u_color by its alpha (the binding editor's weights)
 uniform vec3 u_color;
 out vec4 f_color;
 const vec3 kToLight = normalize(vec3(0.35, 0.6, 0.7));
@@ -175,7 +178,8 @@ void main() {
   vec3 to_eye = normalize(-v_position);
   float diffuse = max(dot(n, kToLight), 0.0);
   float rim = pow(1.0 - clamp(dot(n, to_eye), 0.0, 1.0), 3.0);
-  f_color = vec4(u_color * (0.22 + 0.78 * diffuse) + vec3(0.18 * rim), 1.0);
+  vec3 base = mix(u_color, v_tint.rgb, v_tint.a);
+  f_color = vec4(base * (0.22 + 0.78 * diffuse) + vec3(0.18 * rim), 1.0);
 }
 )";
 
@@ -191,13 +195,18 @@ layout(location = 5) in float a_nz;
 // Per-instance offset, for the render benchmark's raw-instancing reference only; the crowd draw leaves the array
 // disabled, so GL supplies the generic attribute's initial value (0, 0, 0). One shader serves both draws.
 layout(location = 6) in vec3 a_offset;
+// Per-vertex colour (normalised bytes), when the input has one; otherwise a disabled array whose generic value
+// the renderer sets to (0, 0, 0, 0): no tint.
+layout(location = 7) in vec4 a_color;
 uniform mat4 u_view;
 uniform mat4 u_projection;
 out vec3 v_normal;
 out vec3 v_position;
+out vec4 v_tint;
 void main() {
   vec4 view_position = u_view * vec4(vec3(a_px, a_py, a_pz) + a_offset, 1.0);
   v_position = view_position.xyz;
+  v_tint = a_color;
   v_normal = mat3(u_view) * vec3(a_nx, a_ny, a_nz);
   gl_Position = u_projection * view_position;
 }
@@ -376,7 +385,7 @@ struct SkeletonRenderer::Impl {
     const std::uint32_t* topology = nullptr;
     std::size_t index_count = 0, vertex_count = 0;
   };
-  GLuint body_program = 0, body_vao = 0, body_components = 0;
+  GLuint body_program = 0, body_vao = 0, body_components = 0, body_colors = 0;
   std::array<BodySlot, 4> body_slots{};  // one per body level drawn in the same frame
   std::vector<std::uint32_t> optimized;
   std::vector<GLsizei> body_counts;
@@ -394,6 +403,7 @@ struct SkeletonRenderer::Impl {
 
   void create_body_vao() {
     glCreateBuffers(1, &body_components);
+    glCreateBuffers(1, &body_colors);
     for (BodySlot& slot : body_slots) glCreateBuffers(1, &slot.indices);
     glCreateVertexArrays(1, &body_vao);
     for (GLuint a = 0; a < 6; ++a) {
@@ -401,6 +411,8 @@ struct SkeletonRenderer::Impl {
       glVertexArrayAttribFormat(body_vao, a, 1, GL_FLOAT, GL_FALSE, 0);
       glVertexArrayAttribBinding(body_vao, a, a);
     }
+    glVertexArrayAttribFormat(body_vao, 7, 4, GL_UNSIGNED_BYTE, GL_TRUE, 0);
+    glVertexArrayAttribBinding(body_vao, 7, 7);
   }
 
   void draw_bodies(const BodyDrawInput& b, BodySlot& slot, const glm::mat4& view, const glm::mat4& projection) {
@@ -422,6 +434,14 @@ struct SkeletonRenderer::Impl {
     for (GLuint a = 0; a < 6; ++a) {
       glNamedBufferSubData(body_components, a * bytes, bytes, arrays[a]);
       glVertexArrayVertexBuffer(body_vao, a, body_components, a * bytes, sizeof(float));
+    }
+    if (b.rgba) {
+      glNamedBufferData(body_colors, static_cast<GLsizeiptr>(floats * sizeof(std::uint32_t)), b.rgba, GL_STREAM_DRAW);
+      glVertexArrayVertexBuffer(body_vao, 7, body_colors, 0, sizeof(std::uint32_t));
+      glEnableVertexArrayAttrib(body_vao, 7);
+    } else {
+      glDisableVertexArrayAttrib(body_vao, 7);
+      glVertexAttrib4f(7, 0.0f, 0.0f, 0.0f, 0.0f);
     }
     // One multi-draw: the shared index list once per walker, offset by its first vertex.
     body_counts.assign(b.walker_count, static_cast<GLsizei>(b.triangles.size()));
@@ -499,6 +519,7 @@ struct SkeletonRenderer::Impl {
     destroy_mesh(bone);
     destroy_mesh(joint);
     glDeleteVertexArrays(1, &body_vao);
+    glDeleteBuffers(1, &body_colors);
     glDeleteBuffers(1, &body_components);
     const GLuint instanced_buffers[] = {instanced_mesh, instanced_offsets, instanced_slot.indices};
     glDeleteBuffers(3, instanced_buffers);
@@ -787,6 +808,7 @@ void SkeletonRenderer::render_instanced_reference(const BodyDrawInput& mesh, std
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));
   glProgramUniform3fv(p, glGetUniformLocation(p, "u_color"), 1, glm::value_ptr(r.options.skin_color));
+  glVertexAttrib4f(7, 0.0f, 0.0f, 0.0f, 0.0f);  // no per-vertex tint (attribute 7 is never enabled here)
   glBindVertexArray(r.instanced_vao);
   glDrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(mesh.triangles.size()), GL_UNSIGNED_INT, nullptr,
                           static_cast<GLsizei>(offsets.size()));

@@ -34,6 +34,9 @@ struct BodyDrawInput {
   std::size_t stride = 0;        // >= vertex_count
   std::size_t vertex_count = 0;
   std::size_t walker_count = 0;
+  // Optional per-vertex colours, indexed like the positions (walker_count * stride entries), each bytes R, G, B,
+  // A in memory; A blends the colour over the skin colour (0 = plain skin). The binding editor shows weights so.
+  const std::uint32_t* rgba = nullptr;
 };
 
 struct SkeletonRenderOptions {

@@ -288,6 +288,22 @@ void CrowdScene::set_muscle_gains(MuscleGains gains) {
   if (used >= 0 && muscles_enabled()) rebuild_muscle_coefficients();
 }
 
+void CrowdScene::set_body(std::shared_ptr<const Body> body) {
+  const Rig& current = rig();
+  if (!current.body || !body || body->levels.size() != current.body->levels.size())
+    throw std::invalid_argument("CrowdScene::set_body: the new body must have the current body's levels");
+  for (std::size_t k = 0; k < body->levels.size(); ++k)
+    if (body->levels[k].mesh.vertex_count() != current.body->levels[k].mesh.vertex_count() ||
+        body->levels[k].binding.vertex_count() != body->levels[k].mesh.vertex_count())
+      throw std::invalid_argument("CrowdScene::set_body: level " + std::to_string(k) + " changed its vertex count");
+  Rig edited = current;
+  edited.body = std::move(body);
+  rigs_.replace(rig_id_, std::move(edited));
+  // The mocap rig points at the skeleton, which now lives in the new rig.
+  if (mocap_) mocap_rig_ = std::make_unique<const MocapRig>(make_mocap_rig(rig().skeleton, mocap_->clip, mocap_->contacts));
+  rebuild_layout();
+}
+
 void CrowdScene::rebuild_layout() {
   const int used = body_level();
   subdiv_ = is_subdiv_level(used) ? body_subdiv_surface(*rig().body, subdiv_depth(used)) : nullptr;

@@ -92,6 +92,11 @@ class CrowdScene {
   // rig's body has no cage. Switching at run time is cheap: a subdivided surface is built once per rig.
   void set_body_level(int level);
   int body_level() const;
+  // Swaps the rig's body for one with the same meshes and new weights (the binding editor's edits): the skin
+  // layouts are rebuilt, the muscle binding (which depends on rest positions only) is kept. Throws
+  // std::invalid_argument when a level's vertex count differs or the scene has no body. The rig is replaced by an
+  // edited copy (rigs are immutable and may be shared), so references into rig() taken before the call dangle.
+  void set_body(std::shared_ptr<const Body> body);
   // The vertex grouping of the current mesh level (empty at S levels: then the cage's is subdiv()->cage_layout);
   // skinned() is in its order (its triangles renumbered to match).
   const SkinLayout& skin_layout() const { return layout_; }

@@ -366,6 +366,47 @@ TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
   EXPECT_THROW(renderer_->render(SkeletonDrawInput{}, view, projection, &broken), std::invalid_argument);
 }
 
+// Per-vertex colours (the binding editor's weight display): walker 1 tinted pure blue with full alpha turns
+// blue; walker 0 with alpha 0 keeps the skin colour; and a later draw without colours is plain skin again (the
+// disabled attribute must not keep the last tint).
+TEST_F(RenderTest, PerVertexColoursTintOnlyWhereTheirAlphaSays) {
+  std::vector<glm::vec3> positions, normals;
+  std::vector<std::uint32_t> triangles;
+  add_box({-0.8f, 0.5f, -0.2f}, {-0.4f, 1.5f, 0.2f}, positions, normals, &triangles);
+  const std::size_t per_walker = positions.size();
+  add_box({0.4f, 0.3f, -0.2f}, {0.8f, 1.2f, 0.2f}, positions, normals, nullptr);
+  renderer_->options().draw_ground = false;
+  renderer_->options().draw_skeleton = false;
+  std::vector<float> soa[6];
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    for (int c = 0; c < 3; ++c) {
+      soa[c].push_back(positions[v][c]);
+      soa[3 + c].push_back(normals[v][c]);
+    }
+  std::vector<std::uint32_t> rgba(positions.size(), 0x00ff0000u);  // blue, alpha 0: no tint
+  for (std::size_t v = per_walker; v < positions.size(); ++v) rgba[v] = 0xffff0000u;  // blue, opaque
+  BodyDrawInput bodies{triangles, soa[0].data(), soa[1].data(), soa[2].data(), soa[3].data(), soa[4].data(),
+                       soa[5].data(), per_walker, per_walker, 2};
+  bodies.rgba = rgba.data();
+  const OrbitCamera camera = figure_camera();
+  const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
+  const auto colour_at = [&](const glm::vec3& centre) {
+    std::vector<std::uint8_t> image;
+    renderer_->read_rgba(image);
+    const Pixel p = project(centre, view, projection);
+    return pixel_at(image, static_cast<int>(p.x), static_cast<int>(p.y));
+  };
+  const glm::vec3 walker0(-0.6f, 1.0f, 0.0f), walker1(0.6f, 0.75f, 0.0f);
+  renderer_->render(SkeletonDrawInput{}, view, projection, &bodies);
+  const Rgba skin = colour_at(walker0), tinted = colour_at(walker1);
+  EXPECT_GT(skin[0], skin[2]) << "alpha 0 must leave the skin colour";
+  EXPECT_GT(tinted[2], tinted[0] + 40) << "an opaque blue tint must turn the body blue";
+  bodies.rgba = nullptr;
+  renderer_->render(SkeletonDrawInput{}, view, projection, &bodies);
+  const Rgba plain = colour_at(walker1);
+  EXPECT_GT(plain[0], plain[2]) << "without colours the last tint must not stick";
+}
+
 TEST_F(RenderTest, SameInputGivesIdenticalPixels) {
   const OrbitCamera camera = figure_camera();
   renderer_->options().draw_ground = true;  // include the grid shader's derivatives

@@ -6,13 +6,18 @@
 
 #include <algorithm>
 #include <array>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <vector>
 
 #include "apps/view_session.h"
 #include "components/body.h"
 #include "profiling/profiler.h"
+#include "render/camera.h"
 #include "render/gl_context.h"
+#include "rig/binding.h"
+#include "rig/binding_editor.h"
 #include "ui/imgui_layer.h"
 #include "ui/view_panel.h"
 
@@ -202,6 +207,27 @@ TEST_F(UiTest, NewCrowdHasTheAskedSizeAndKeepsTheUsersSettings) {
   EXPECT_EQ(session_->scene().skinned().walkers, 7u);
 }
 
+TEST_F(UiTest, BindingTabStartsAndStopsTheEditor) {
+  frame();
+  frame();
+  click("tab:Binding");
+  frame();
+  ASSERT_TRUE(probe_.rects.count("Edit binding"));
+  click("Edit binding");
+  session_->apply_binding_requests();
+  ASSERT_TRUE(session_->panel().binding.active);
+  frame();
+  ASSERT_TRUE(probe_.rects.count("Bind selection")) << "the editing controls did not appear";
+  click("joint");
+  frame();
+  ASSERT_TRUE(probe_.rects.count("joint:l_hip"));
+  click("joint:l_hip");
+  EXPECT_EQ(session_->panel().binding.joint, session_->scene().rig().skeleton.find_joint("l_hip"));
+  click("Done");
+  session_->apply_binding_requests();
+  EXPECT_FALSE(session_->panel().binding.active);
+}
+
 TEST(TimingHistory, KeepsTheLastFramesOfEverySystemInFrameOrder) {
   cli::SceneOptions options;
   options.walkers = 2;
@@ -224,6 +250,200 @@ TEST(TimingHistory, KeepsTheLastFramesOfEverySystemInFrameOrder) {
   const auto at = [&](const char* n) { return std::find(names.begin(), names.end(), n) - names.begin(); };
   ASSERT_LT(at("skin"), static_cast<long>(names.size()));
   EXPECT_LT(at("locomotion"), at("skin")) << "series are in the frame script's order";
+}
+
+}  // namespace
+}  // namespace strata
+
+// ---- The binding editor as the viewer drives it (no window: ViewSession with a scripted mouse) ----
+
+namespace strata {
+namespace {
+
+struct EditorRig {
+  explicit EditorRig(std::size_t walkers = 1) : session(options(walkers)) {
+    session.panel().binding.rest_pose = true;  // still walkers in the rest pose
+    session.apply_crowd_request();
+    session.panel().binding.activate_requested = true;
+    session.apply_binding_requests();
+    session.advance(0.0f, profiler);
+    glm::vec3 lo, hi;
+    if (cli::body_bounds(session.scene(), lo, hi)) camera.frame_box(lo, hi, aspect());
+    view_projection = camera.projection(aspect()) * camera.view();
+  }
+  static cli::SceneOptions options(std::size_t walkers) {
+    cli::SceneOptions o;
+    o.walkers = walkers;
+    o.threads = 1;
+    return o;
+  }
+  float aspect() const { return static_cast<float>(viewport.x) / static_cast<float>(viewport.y); }
+  void press_release(glm::vec2 from, glm::vec2 to, bool shift = false) {
+    cli::EditorMouse m;
+    m.cursor = from;
+    m.pressed = m.down = true;
+    m.shift = shift;
+    session.binding_mouse(m, view_projection, viewport);
+    m = {};
+    m.cursor = to;
+    m.released = true;
+    m.shift = shift;
+    session.binding_mouse(m, view_projection, viewport);
+  }
+  const SkinBinding& level_binding(int level = 0) const {
+    return session.scene().rig().body->levels[static_cast<std::size_t>(level)].binding;
+  }
+
+  cli::ViewSession session;
+  Profiler profiler{16, false};
+  OrbitCamera camera;
+  glm::ivec2 viewport{800, 600};
+  glm::mat4 view_projection{1.0f};
+};
+
+TEST(BindingEditorSession, StartsOnAMeshLevelPausedWithAJoint) {
+  EditorRig rig;
+  const BindingEditState& b = rig.session.panel().binding;
+  ASSERT_TRUE(b.active);
+  EXPECT_EQ(b.level, 0);
+  EXPECT_TRUE(rig.session.panel().paused);
+  EXPECT_GE(b.joint, 0);
+  ASSERT_NE(rig.session.binding_editor(), nullptr);
+}
+
+TEST(BindingEditorSession, ClickBindShowsSavesAndUndoes) {
+  EditorRig rig;
+  BindingEditState& b = rig.session.panel().binding;
+  b.tool = BindingEditState::Tool::Click;
+  rig.press_release({400.0f, 300.0f}, {400.0f, 300.0f});  // the middle of the framed body
+  ASSERT_EQ(b.selected, 1u) << "a click on the body picks one vertex";
+  const std::uint32_t v = rig.session.binding_editor()->selection().ids().at(0);
+  const Skeleton skeleton = rig.session.scene().rig().skeleton;  // a copy: binding replaces the rig
+  const int joint = skeleton.find_joint("l_shoulder");
+  ASSERT_GE(joint, 0);
+  const SkinBinding before = rig.level_binding();
+  b.joint = joint;
+  b.bind_requested = true;
+  rig.session.apply_binding_requests();
+  // The crowd deforms with the new weights at once: the scene's body carries them.
+  const SkinBinding after = rig.level_binding();
+  std::vector<int> joints;
+  for (int k = 0; k < kMaxInfluences; ++k)
+    if (after.weights[v][k] > 0.0f) joints.push_back(after.joints[v][k]);
+  EXPECT_NE(std::find(joints.begin(), joints.end(), joint), joints.end());
+  for (int j : joints) EXPECT_TRUE(j == joint || j == skeleton.parents[static_cast<std::size_t>(joint)]);
+  EXPECT_EQ(b.edits, 1u);
+  EXPECT_EQ(b.selected, 0u) << "a bound selection is cleared for the next pick";
+  // The weights show: the chosen joint's heat on the edited vertex differs from an untouched far vertex.
+  std::vector<BodyDrawInput> draws = cli::body_draw_inputs(rig.session.scene());
+  rig.session.colour_draws(draws);
+  ASSERT_EQ(draws.size(), 1u);
+  ASSERT_NE(draws[0].rgba, nullptr);
+  // Saved, the overrides file reproduces the edited binding from scratch.
+  const auto path = std::filesystem::temp_directory_path() / "strata_ui_test_overrides.json";
+  b.save_path = path.string();
+  b.save_requested = true;
+  rig.session.apply_binding_requests();
+  ASSERT_TRUE(std::filesystem::exists(path)) << rig.session.panel().last_message;
+  const BindingTables reloaded = load_binding_overrides_file(path.string(), default_binding_tables());
+  // set_body replaced the rig: fetch its parts afresh.
+  const Rig& edited_rig = rig.session.scene().rig();
+  const SkinBinding rebound = bind_three_step(edited_rig.body->levels[0].mesh, edited_rig.skeleton, reloaded);
+  EXPECT_EQ(rebound.joints, after.joints);
+  EXPECT_EQ(rebound.weights, after.weights);
+  std::filesystem::remove(path);
+  b.undo_requested = true;
+  rig.session.apply_binding_requests();
+  EXPECT_EQ(rig.level_binding().joints, before.joints);
+  EXPECT_EQ(rig.level_binding().weights, before.weights);
+}
+
+TEST(BindingEditorSession, BoxTakesVisibleVerticesUnlessSelectingThrough) {
+  EditorRig rig;
+  BindingEditState& b = rig.session.panel().binding;
+  b.tool = BindingEditState::Tool::Box;
+  rig.press_release({0.0f, 0.0f}, {800.0f, 600.0f});
+  const std::size_t visible = b.selected;
+  const std::size_t total = rig.level_binding().vertex_count();
+  EXPECT_GT(visible, total / 5) << "the front of the body";
+  EXPECT_LT(visible, total * 7 / 10) << "the back is hidden";
+  b.select_through = true;
+  rig.press_release({0.0f, 0.0f}, {800.0f, 600.0f});
+  EXPECT_GT(b.selected, visible + total / 5) << "select through takes the back too";
+  // Shift adds a second box to the first; a box on empty ground adds nothing.
+  b.select_through = false;
+  rig.press_release({0.0f, 0.0f}, {400.0f, 600.0f});
+  const std::size_t left = b.selected;
+  rig.press_release({400.0f, 0.0f}, {800.0f, 600.0f}, true);
+  EXPECT_GT(b.selected, left);
+}
+
+TEST(BindingEditorSession, BrushPaintsAlongTheDrag) {
+  EditorRig rig;
+  BindingEditState& b = rig.session.panel().binding;
+  b.tool = BindingEditState::Tool::Brush;
+  b.brush_radius_px = 10.0f;
+  cli::EditorMouse m;
+  m.cursor = {400.0f, 250.0f};
+  m.pressed = m.down = true;
+  rig.session.binding_mouse(m, rig.view_projection, rig.viewport);
+  const std::size_t dab = b.selected;
+  EXPECT_GT(dab, 0u);
+  m.pressed = false;
+  for (float y = 260.0f; y <= 350.0f; y += 10.0f) {
+    m.cursor.y = y;
+    rig.session.binding_mouse(m, rig.view_projection, rig.viewport);
+  }
+  m.down = false;
+  m.released = true;
+  rig.session.binding_mouse(m, rig.view_projection, rig.viewport);
+  EXPECT_GT(b.selected, 3 * dab) << "a stroke covers more than one dab";
+  EXPECT_FALSE(b.dragging);
+}
+
+TEST(BindingEditorSession, StartsFromTheOverridesFileTheSceneWasBoundWith) {
+  const auto path = std::filesystem::temp_directory_path() / "strata_ui_test_start.json";
+  {
+    std::ofstream f(path);
+    f << R"({"overrides": [{"name": "ball", "sphere": {"center": [0, 1, 0], "radius": 0.1}, "joints": ["vl5"]}]})";
+  }
+  cli::SceneOptions o = EditorRig::options(1);
+  o.binding_overrides = path.string();
+  cli::ViewSession session(o);
+  EXPECT_EQ(session.panel().binding.save_path, path.string()) << "Save goes back to the file being edited";
+  session.panel().binding.activate_requested = true;
+  session.apply_binding_requests();
+  ASSERT_TRUE(session.panel().binding.active);
+  ASSERT_EQ(session.binding_tables().overrides.size(), 1u);
+  EXPECT_EQ(session.binding_tables().overrides[0].name, "ball");
+  std::filesystem::remove(path);
+}
+
+TEST(BindingEditorSession, EditsSurviveANewCrowdAndFollowTheLevel) {
+  EditorRig rig;
+  BindingEditState& b = rig.session.panel().binding;
+  b.tool = BindingEditState::Tool::Box;
+  rig.press_release({300.0f, 200.0f}, {500.0f, 400.0f});
+  ASSERT_GT(b.selected, 0u);
+  b.joint = rig.session.scene().rig().skeleton.find_joint("r_hip");
+  b.bind_requested = true;
+  rig.session.apply_binding_requests();
+  const SkinBinding edited = rig.level_binding();
+  rig.session.panel().walkers = 3;
+  rig.session.panel().rebuild_requested = true;
+  ASSERT_TRUE(rig.session.apply_crowd_request());
+  EXPECT_EQ(rig.session.scene().walker_count(), 3u);
+  EXPECT_EQ(rig.level_binding().weights, edited.weights) << "a new crowd lost the edits";
+  EXPECT_TRUE(b.active) << "editing goes on in the new crowd";
+  // Another mesh level: the editor follows it, and the file keeps both levels' edits apart.
+  rig.session.scene().set_body_level(2);
+  rig.session.apply_binding_requests();
+  EXPECT_TRUE(b.active);
+  EXPECT_EQ(b.level, 2);
+  EXPECT_EQ(rig.session.binding_tables().overrides.size(), default_binding_tables().overrides.size() + 1);
+  rig.session.scene().set_body_level(kAutoBodyLevel);
+  rig.session.apply_binding_requests();
+  EXPECT_FALSE(b.active) << "weights cannot be edited on the automatic mix of levels";
 }
 
 }  // namespace

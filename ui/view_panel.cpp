@@ -1,12 +1,14 @@
 #include "ui/view_panel.h"
 
 #include <imgui.h>
+#include <imgui_stdlib.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 
 #include "components/body.h"
+#include "components/skeleton.h"
 #include "profiling/profiler.h"
 #include "systems/frame_script.h"
 
@@ -194,6 +196,81 @@ void timing_section(const ViewPanelState& s) {
   }
 }
 
+void binding_section(CrowdScene& scene, BindingEditState& b, UiProbe* probe) {
+  if (!scene.rig().body || scene.rig().body->levels.empty()) {
+    ImGui::TextDisabled("no body to bind");
+    return;
+  }
+  if (!b.active) {
+    ImGui::TextWrapped("Pick skin vertices with the mouse and bind them to a joint and its parent (the paper's "
+                       "manual step, saved as a binding overrides file).");
+    if (ImGui::Button("Edit binding")) b.activate_requested = true;
+    note(probe, "Edit binding");
+    ImGui::Checkbox("rest pose", &b.rest_pose);
+    note(probe, "rest pose");
+    return;
+  }
+  ImGui::Text("level %d: %zu selected, %zu edits", b.level, b.selected, b.edits);
+  int tool = static_cast<int>(b.tool);
+  ImGui::RadioButton("click", &tool, 0);
+  note(probe, "tool:click");
+  ImGui::SameLine();
+  ImGui::RadioButton("box", &tool, 1);
+  note(probe, "tool:box");
+  ImGui::SameLine();
+  ImGui::RadioButton("brush", &tool, 2);
+  note(probe, "tool:brush");
+  b.tool = static_cast<BindingEditState::Tool>(tool);
+  ImGui::BeginDisabled(b.tool != BindingEditState::Tool::Brush);
+  ImGui::SliderFloat("brush radius", &b.brush_radius_px, 2.0f, 120.0f, "%.0f px");
+  ImGui::EndDisabled();
+  ImGui::Checkbox("select through", &b.select_through);
+  ImGui::SameLine();
+  ImGui::Checkbox("rest pose", &b.rest_pose);
+  note(probe, "rest pose");
+  const Skeleton& skeleton = scene.rig().skeleton;
+  const char* current = b.joint >= 0 && static_cast<std::size_t>(b.joint) < skeleton.joint_count()
+                            ? skeleton.joint_names[static_cast<std::size_t>(b.joint)].c_str()
+                            : "(joint)";
+  if (ImGui::BeginCombo("joint", current, ImGuiComboFlags_HeightLargest)) {
+    for (std::size_t j = 0; j < skeleton.joint_count(); ++j) {
+      const bool selected = static_cast<int>(j) == b.joint;
+      if (ImGui::Selectable(skeleton.joint_names[j].c_str(), selected)) b.joint = static_cast<int>(j);
+      note(probe, "joint:" + skeleton.joint_names[j]);
+      if (selected) ImGui::SetItemDefaultFocus();
+    }
+    ImGui::EndCombo();
+  }
+  note(probe, "joint");
+  const int parent = b.joint >= 0 ? skeleton.parents[static_cast<std::size_t>(b.joint)] : -1;
+  ImGui::TextDisabled("blends with its parent: %s",
+                      parent >= 0 ? skeleton.joint_names[static_cast<std::size_t>(parent)].c_str() : "(none: rigid)");
+  ImGui::Checkbox("show weights", &b.show_weights);
+  if (ImGui::Button("Bind selection")) b.bind_requested = true;
+  note(probe, "Bind selection");
+  ImGui::SameLine();
+  if (ImGui::Button("Undo")) b.undo_requested = true;
+  note(probe, "Undo");
+  ImGui::SameLine();
+  if (ImGui::Button("Clear")) b.clear_requested = true;
+  note(probe, "Clear");
+  ImGui::InputText("file", &b.save_path);
+  note(probe, "file");
+  if (ImGui::Button("Save overrides")) b.save_requested = true;
+  note(probe, "Save overrides");
+  ImGui::SameLine();
+  if (ImGui::Button("Done")) b.deactivate_requested = true;
+  note(probe, "Done");
+  ImGui::TextDisabled("left: select (Shift adds, Ctrl removes), Alt+left: orbit");
+  // The drag's outline over the scene.
+  ImDrawList* overlay = ImGui::GetForegroundDrawList();
+  const glm::vec2 from = b.drag_from / b.pixels_per_unit, at = b.cursor / b.pixels_per_unit;
+  if (b.dragging && b.tool == BindingEditState::Tool::Box)
+    overlay->AddRect(ImVec2(from.x, from.y), ImVec2(at.x, at.y), IM_COL32(255, 255, 255, 220));
+  if (b.tool == BindingEditState::Tool::Brush && !ImGui::GetIO().WantCaptureMouse)
+    overlay->AddCircle(ImVec2(at.x, at.y), b.brush_radius_px / b.pixels_per_unit.x, IM_COL32(255, 255, 255, 160), 32);
+}
+
 }  // namespace
 
 void draw_view_panel(CrowdScene& scene, ViewPanelState& state, UiProbe* probe) {
@@ -220,6 +297,7 @@ void draw_view_panel(CrowdScene& scene, ViewPanelState& state, UiProbe* probe) {
     tab("Gait", [&] { gait_section(scene, probe); });
     tab("Muscles", [&] { muscle_section(scene, probe); });
     tab("Timings", [&] { timing_section(state); });
+    tab("Binding", [&] { binding_section(scene, state.binding, probe); });
     ImGui::EndTabBar();
   }
   if (!state.last_message.empty()) ImGui::TextWrapped("%s", state.last_message.c_str());

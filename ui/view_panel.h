@@ -44,6 +44,30 @@ struct UiProbe {
   glm::vec2 centre(const std::string& label) const;       // throws std::out_of_range for an unknown label
 };
 
+// The binding editor's controls (the panel's "Binding" tab); ViewSession acts on the requests and fills in the
+// counts.
+struct BindingEditState {
+  enum class Tool : std::uint8_t { Click, Box, Brush };
+  bool active = false;            // edit mode: left-drag selects (Alt+left-drag orbits), weights shown
+  bool activate_requested = false, deactivate_requested = false;
+  Tool tool = Tool::Click;
+  float brush_radius_px = 24.0f;
+  bool select_through = false;    // box and brush also take vertices hidden behind the surface
+  bool rest_pose = false;         // edit on walkers standing in the rest pose instead of walking
+  int joint = -1;                 // joint to bind to, and whose weights are shown; -1 until chosen
+  bool show_weights = true;
+  bool bind_requested = false, undo_requested = false, clear_requested = false, save_requested = false;
+  std::string save_path = "binding_overrides.json";
+  // Filled in by ViewSession.
+  int level = -1;                 // mesh level being edited
+  std::size_t selected = 0, edits = 0;
+  // The drag in progress (framebuffer pixels), for the panel to draw the box or brush outline; pixels_per_unit
+  // converts to the window units ImGui draws in (they differ on HiDPI screens).
+  bool dragging = false;
+  glm::vec2 drag_from{0.0f}, cursor{0.0f};
+  glm::vec2 pixels_per_unit{1.0f};
+};
+
 struct ViewPanelState {
   // Playback.
   bool paused = false;
@@ -61,6 +85,7 @@ struct ViewPanelState {
   float fps = 0.0f;
   std::string last_message;       // e.g. "saved out/view/screenshot_000.png"
   TimingHistory timings;
+  BindingEditState binding;
 };
 
 // Draws the panel for this frame (between ImGuiLayer::begin_frame and render). `probe`, when given, records
