@@ -20,6 +20,7 @@
 #include "io/image_writer.h"
 #include "profiling/profiler.h"
 #include "render/camera.h"
+#include "render/gl_context.h"
 #include "render/gl_context_glfw.h"
 #include "render/skeleton_renderer.h"
 #include "systems/frame_script.h"
@@ -39,6 +40,9 @@ struct ViewOptions {
   std::string screenshot_dir = "out/view";
   bool skeleton_overlay = false;
   bool no_panel = false;
+  std::string headless_png;  // render without a window (EGL) and save the last frame, panel included
+  std::string tab;           // panel tab to open first
+  std::string edit_joint;    // start the binding editor showing this joint's weights
 };
 
 std::string timing_title(const Profiler& profiler, double fps) {
@@ -52,11 +56,85 @@ std::string timing_title(const Profiler& profiler, double fps) {
   return title.str();
 }
 
+// Applies --tab and --edit-binding to a new session.
+void apply_start_options(const ViewOptions& o, ViewSession& session) {
+  ViewPanelState& panel = session.panel();
+  panel.select_tab = o.tab;
+  if (o.edit_joint.empty()) return;
+  const int joint = session.scene().rig().skeleton.find_joint(o.edit_joint);
+  if (joint < 0) throw std::invalid_argument("--edit-binding: no joint '" + o.edit_joint + "' in the skeleton");
+  panel.binding.activate_requested = true;
+  session.apply_binding_requests();
+  panel.binding.joint = joint;
+  if (o.tab.empty()) panel.select_tab = "Binding";
+}
+
+// The viewer without a window: the same session, scene and panel drawn through EGL into the renderer's output,
+// for pictures of the tool (README) and for checking the panel on machines without a display.
+int run_view_headless(const ViewOptions& o) {
+  try {
+    ViewSession session(o.scene);
+    apply_start_options(o, session);
+    std::unique_ptr<GlContext> context = create_headless_gl_context();
+    SkeletonRenderer renderer(o.width, o.height);
+    std::optional<ImGuiLayer> ui;
+    if (!o.no_panel) ui.emplace();
+    Profiler profiler(120, false);
+    OrbitCamera camera;
+    const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
+    std::vector<glm::vec3> joints;
+    const std::size_t frames = o.frames ? o.frames : 30;
+    ViewPanelState& panel = session.panel();
+    for (std::size_t f = 0; f < frames; ++f) {
+      session.apply_binding_requests();
+      CrowdScene& scene = session.scene();
+      profiler.begin_frame();
+      {
+        STRATA_PROFILE_SCOPE(profiler, "frame");
+        session.advance(1.0f / 30.0f, profiler);
+        STRATA_PROFILE_SCOPE(profiler, "render");
+        gather_joint_positions(scene.lanes(), joints);
+        glm::vec3 lo, hi;
+        if (f == 0 && (body_bounds(scene, lo, hi) || joint_bounds(joints, lo, hi))) camera.frame_box(lo, hi, aspect);
+        std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
+        session.colour_draws(bodies);
+        renderer.options().draw_skeleton = bodies.empty() || panel.show_skeleton;
+        renderer.render({&scene.rig().skeleton, joints, scene.walker_count()}, camera.view(), camera.projection(aspect),
+                        bodies);
+        panel.triangles_drawn = renderer.triangles_drawn();
+        scene.set_view(lod_view(camera, aspect, o.height));
+        if (ui) {
+          STRATA_PROFILE_SCOPE(profiler, "ui");
+          UiFrameInput in;
+          in.display_size = {static_cast<float>(o.width), static_cast<float>(o.height)};
+          ui->begin_frame(in);
+          draw_view_panel(scene, panel);
+          ui->render({o.width, o.height}, renderer.output_framebuffer());
+        }
+      }
+      profiler.end_frame();
+      panel.timings.push(profiler);
+      for (const SystemStats& s : profiler.stats())
+        if (s.name == "frame" && s.mean_ms > 0) panel.fps = static_cast<float>(1000.0 / s.mean_ms);
+    }
+    std::vector<std::uint8_t> pixels;
+    renderer.read_rgba(pixels);
+    write_image(o.headless_png, renderer.width(), renderer.height(), 4, pixels);
+    std::cout << "strata view: " << frames << " frames, " << session.scene().walker_count() << " walkers, saved "
+              << o.headless_png << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "strata view: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
 int run_view(const ViewOptions& o) {
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
     ViewSession session(o.scene);
+    apply_start_options(o, session);
     ViewPanelState& panel = session.panel();
     panel.show_skeleton = o.skeleton_overlay;
 
@@ -208,7 +286,19 @@ void add_view_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-panel", o->no_panel, "Hide the control panel (crowd, levels, gait, muscles, timings)");
   cmd->add_flag("--skeleton-overlay", o->skeleton_overlay, "Draw the skeletons too when bodies are drawn");
   cmd->add_option("--screenshot-dir", o->screenshot_dir, "Where S saves PNG screenshots")->capture_default_str();
-  cmd->callback([o, &exit_code] { exit_code = run_view(*o); });
+  cmd->add_option("--headless-png", o->headless_png,
+                  "No window: render --frames frames (default 30) through EGL and save the last, panel included");
+  cmd->add_option("--tab", o->tab, "Panel tab to open first: Crowd, Gait, Muscles, Timings or Binding");
+  cmd->add_option("--edit-binding", o->edit_joint, "Start the binding editor showing this joint's weights");
+  cmd->callback([o, &exit_code] {
+    if (!o->headless_png.empty()) {
+      const int threads = thread_count(o->scene);
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+      exit_code = run_view_headless(*o);
+    } else {
+      exit_code = run_view(*o);
+    }
+  });
 }
 
 }  // namespace strata::cli

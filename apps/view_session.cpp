@@ -11,6 +11,7 @@ namespace strata::cli {
 
 ViewSession::ViewSession(SceneOptions options) : options_(std::move(options)), scene_(build_scene(options_)) {
   if (!options_.binding_overrides.empty()) panel_.binding.save_path = options_.binding_overrides;
+  panel_.binding.rest_pose = options_.rest;  // else the first frame would "toggle" --rest off
   panel_.walkers = static_cast<int>(std::min<std::size_t>(options_.walkers, 100000));
   panel_.seed = static_cast<int>(options_.seed);
 }

@@ -734,6 +734,8 @@ void SkeletonRenderer::render(const SkeletonDrawInput& input, const glm::mat4& v
                          GL_COLOR_BUFFER_BIT, GL_NEAREST);
 }
 
+unsigned SkeletonRenderer::output_framebuffer() const { return impl_->resolve_fbo; }
+
 void SkeletonRenderer::read_rgba(std::vector<std::uint8_t>& out) const {
   const Impl& r = *impl_;
   const std::size_t row_bytes = static_cast<std::size_t>(r.width) * 4;

@@ -90,6 +90,9 @@ class SkeletonRenderer {
   void finish() const;
   // RGBA8 pixels, rows top to bottom (image order), width*height*4 bytes.
   void read_rgba(std::vector<std::uint8_t>& out) const;
+  // The single-sample framebuffer render() resolves into and read_rgba() reads: an overlay (the viewer's panel)
+  // drawn into it after render() shows up in read_rgba().
+  unsigned output_framebuffer() const;
   // Copies the FBO to framebuffer 0 (a window), scaled to the given size.
   void blit_to_default_framebuffer(int width, int height) const;
 

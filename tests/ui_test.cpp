@@ -18,6 +18,7 @@
 #include "render/gl_context.h"
 #include "rig/binding.h"
 #include "rig/binding_editor.h"
+#include "tests/strata_cli_runner.h"
 #include "ui/imgui_layer.h"
 #include "ui/view_panel.h"
 
@@ -444,6 +445,42 @@ TEST(BindingEditorSession, EditsSurviveANewCrowdAndFollowTheLevel) {
   rig.session.scene().set_body_level(kAutoBodyLevel);
   rig.session.apply_binding_requests();
   EXPECT_FALSE(b.active) << "weights cannot be edited on the automatic mix of levels";
+}
+
+}  // namespace
+}  // namespace strata
+
+// ---- strata view without a window ----
+
+namespace strata {
+namespace {
+
+TEST(ViewHeadless, SavesTheSceneWithThePanelAndRejectsAnUnknownJoint) {
+  const auto png = std::filesystem::temp_directory_path() / "strata_ui_test_view.png";
+  std::filesystem::remove(png);
+  const test::CliResult ok = test::run_strata("view --headless-png " + png.string() +
+                                              " --walkers 1 --rest --frames 3 --width 320 --height 240 "
+                                              "--edit-binding l_hip",
+                                              "EGL_LOG_LEVEL=fatal");
+  ASSERT_EQ(ok.status, 0) << ok.out;
+  EXPECT_NE(ok.out.find("3 frames, 1 walkers"), std::string::npos) << ok.out;
+  ASSERT_TRUE(std::filesystem::exists(png));
+  EXPECT_GT(std::filesystem::file_size(png), 1000u);
+  std::filesystem::remove(png);
+  const test::CliResult bad =
+      test::run_strata("view --headless-png " + png.string() + " --walkers 1 --frames 1 --edit-binding no_such_joint",
+                       "EGL_LOG_LEVEL=fatal");
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.out.find("no joint 'no_such_joint'"), std::string::npos) << bad.out;
+  EXPECT_FALSE(std::filesystem::exists(png)) << "nothing written on an error";
+}
+
+TEST(BindingEditorSession, RestPoseOptionIsNotUndoneByThePanel) {
+  cli::SceneOptions o = EditorRig::options(1);
+  o.rest = true;
+  cli::ViewSession session(o);
+  EXPECT_TRUE(session.panel().binding.rest_pose);
+  EXPECT_FALSE(session.apply_crowd_request()) << "--rest rebuilt the crowd on the first frame";
 }
 
 }  // namespace

@@ -4,9 +4,8 @@
 // the panel). Input comes either from a GLFW window (ImGui's GLFW backend, chained to the window's own callbacks)
 // or, headless, from UiFrameInput, which is how the tests drive the panel with a scripted mouse.
 //
-// Why a separate static library (strata_ui) rather than part of libstrata: Debian ships ImGui as a static
-// archive built without -fPIC, which cannot go into a shared library; the UI is only needed by the viewer app
-// and its tests anyway.
+// Why a separate static library (strata_ui) rather than part of libstrata: only the viewer and its tests need a
+// GUI, and programs using Strata as a library should not inherit Dear ImGui and its GLFW backend.
 #include <memory>
 
 #include <glm/vec2.hpp>

@@ -281,8 +281,11 @@ void draw_view_panel(CrowdScene& scene, ViewPanelState& state, UiProbe* probe) {
   ImGui::PushItemWidth(180.0f);
   playback_section(state, probe);
   if (ImGui::BeginTabBar("sections")) {
+    const std::string select = std::move(state.select_tab);
+    state.select_tab.clear();
     const auto tab = [&](const char* name, auto&& body) {
-      const bool open = ImGui::BeginTabItem(name);
+      const bool open =
+          ImGui::BeginTabItem(name, nullptr, select == name ? ImGuiTabItemFlags_SetSelected : ImGuiTabItemFlags_None);
       note(probe, std::string("tab:") + name);
       if (open) {
         body();

@@ -86,6 +86,7 @@ struct ViewPanelState {
   std::string last_message;       // e.g. "saved out/view/screenshot_000.png"
   TimingHistory timings;
   BindingEditState binding;
+  std::string select_tab;         // a tab to bring to the front on the next frame ("Crowd", "Binding", ...)
 };
 
 // Draws the panel for this frame (between ImGuiLayer::begin_frame and render). `probe`, when given, records
