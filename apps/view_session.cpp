@@ -1,6 +1,7 @@
 #include "apps/view_session.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "components/body.h"
@@ -74,6 +75,24 @@ std::shared_ptr<const Body> with_level_binding(const Body& body, int level, cons
   auto edited = std::make_shared<Body>(body);
   edited->levels[static_cast<std::size_t>(level)].binding = binding;
   return edited;
+}
+
+// Slab test; a ray starting inside the box hits it.
+bool ray_hits_box(const PickRay& ray, const glm::vec3& lo, const glm::vec3& hi) {
+  float t0 = 0.0f, t1 = std::numeric_limits<float>::max();
+  for (int a = 0; a < 3; ++a) {
+    const float d = ray.direction[a];
+    if (std::abs(d) < 1e-12f) {
+      if (ray.origin[a] < lo[a] || ray.origin[a] > hi[a]) return false;
+      continue;
+    }
+    float ta = (lo[a] - ray.origin[a]) / d, tb = (hi[a] - ray.origin[a]) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
 }
 
 bool is_mesh_level(const CrowdScene& scene, int level) {
@@ -208,20 +227,29 @@ void ViewSession::binding_mouse(const EditorMouse& m, const glm::mat4& view_proj
     float best = std::numeric_limits<float>::max(), best_screen = best;
     long hit_block = -1, near_block = -1;
     std::optional<std::uint32_t> hit_vertex;
+    const SkinnedCrowd& skinned = scene_->skinned();
     for (std::size_t k = 0; k < block_count(); ++k) {
+      // The block's bounds straight from the SoA output: cheap, and a ray that misses them skips the block's
+      // triangles (a click over a crowd of 1,000 would otherwise test every triangle of every walker).
+      const std::size_t first = k * skinned.stride, n = skinned.vertex_count;
+      glm::vec3 lo{skinned.px[first], skinned.py[first], skinned.pz[first]}, hi = lo;
+      for (std::size_t i = first; i < first + n; ++i) {
+        const glm::vec3 p{skinned.px[i], skinned.py[i], skinned.pz[i]};
+        lo = glm::min(lo, p), hi = glm::max(hi, p);
+      }
+      const glm::vec4 c = view_projection * glm::vec4(0.5f * (lo + hi), 1.0f);
+      if (c.w > 0.0f) {
+        const glm::vec2 px{(c.x / c.w * 0.5f + 0.5f) * static_cast<float>(viewport.x),
+                           (0.5f - c.y / c.w * 0.5f) * static_cast<float>(viewport.y)};
+        const float screen = glm::length(px - m.cursor);
+        if (screen < best_screen) best_screen = screen, near_block = static_cast<long>(k);
+      }
+      if (!ray_hits_box(ray, lo, hi)) continue;
       block_positions(k, positions);
       if (const auto v = pick_vertex(EditMesh{positions, mesh.triangles}, ray)) {
         const float d = glm::length(positions[*v] - ray.origin);
         if (d < best) best = d, hit_block = static_cast<long>(k), hit_vertex = v;
       }
-      glm::vec3 lo = positions[0], hi = positions[0];
-      for (const glm::vec3& p : positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-      const glm::vec4 c = view_projection * glm::vec4(0.5f * (lo + hi), 1.0f);
-      if (c.w <= 0.0f) continue;
-      const glm::vec2 px{(c.x / c.w * 0.5f + 0.5f) * static_cast<float>(viewport.x),
-                         (0.5f - c.y / c.w * 0.5f) * static_cast<float>(viewport.y)};
-      const float screen = glm::length(px - m.cursor);
-      if (screen < best_screen) best_screen = screen, near_block = static_cast<long>(k);
     }
     press_block_ = hit_block >= 0 ? hit_block : near_block;
     if (b.tool == BindingEditState::Tool::Click) {

@@ -359,6 +359,30 @@ TEST(BindingEditorSession, ClickBindShowsSavesAndUndoes) {
   EXPECT_EQ(rig.level_binding().weights, before.weights);
 }
 
+TEST(BindingEditorSession, ClickPicksOnTheWalkerUnderTheCursor) {
+  EditorRig rig(4);
+  const SkinnedCrowd& s = rig.session.scene().skinned();
+  ASSERT_EQ(s.walkers, 4u);
+  const auto project = [&](const glm::vec3& p) {
+    const glm::vec4 c = rig.view_projection * glm::vec4(p, 1.0f);
+    return glm::vec2{(c.x / c.w * 0.5f + 0.5f) * 800.0f, (0.5f - c.y / c.w * 0.5f) * 600.0f};
+  };
+  const std::vector<std::uint32_t>& original = rig.session.scene().skin_layout().original;
+  for (std::size_t k = 0; k < s.walkers; ++k) {
+    // Aim at the walker's pelvis height: the centre of its bounds.
+    glm::vec3 lo = s.position(k, 0), hi = lo;
+    for (std::size_t i = 0; i < s.vertex_count; ++i) lo = glm::min(lo, s.position(k, i)), hi = glm::max(hi, s.position(k, i));
+    const glm::vec2 at = project(0.5f * (lo + hi));
+    rig.press_release(at, at);
+    ASSERT_EQ(rig.session.panel().binding.selected, 1u) << "walker " << k;
+    const std::uint32_t v = rig.session.binding_editor()->selection().ids().at(0);
+    const auto layout_index = static_cast<std::size_t>(
+        std::find(original.begin(), original.end(), v) - original.begin());
+    EXPECT_LT(glm::length(project(s.position(k, layout_index)) - at), 20.0f)
+        << "the picked vertex is not on walker " << k << " under the cursor";
+  }
+}
+
 TEST(BindingEditorSession, BoxTakesVisibleVerticesUnlessSelectingThrough) {
   EditorRig rig;
   BindingEditState& b = rig.session.panel().binding;
