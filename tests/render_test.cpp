@@ -318,23 +318,38 @@ void add_box(const glm::vec3& lo, const glm::vec3& hi, std::vector<glm::vec3>& p
     }
 }
 
-TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
+// Two box "walkers" sharing one topology, in the skin system's SoA: six component arrays, walker blocks `stride`
+// apart. Walker 0 spans x -0.8..-0.4, walker 1 x 0.4..0.8.
+struct TwoBoxBodies {
   std::vector<glm::vec3> positions, normals;
   std::vector<std::uint32_t> triangles;
-  add_box({-0.8f, 0.5f, -0.2f}, {-0.4f, 1.5f, 0.2f}, positions, normals, &triangles);
-  const std::size_t per_walker = positions.size();
-  add_box({0.4f, 0.3f, -0.2f}, {0.8f, 1.2f, 0.2f}, positions, normals, nullptr);  // walker 2, same topology
+  std::vector<float> soa[6];
+  std::size_t per_walker = 0;
+
+  TwoBoxBodies() {
+    add_box({-0.8f, 0.5f, -0.2f}, {-0.4f, 1.5f, 0.2f}, positions, normals, &triangles);
+    per_walker = positions.size();
+    add_box({0.4f, 0.3f, -0.2f}, {0.8f, 1.2f, 0.2f}, positions, normals, nullptr);  // walker 2, same topology
+    for (std::size_t v = 0; v < positions.size(); ++v)
+      for (int c = 0; c < 3; ++c) {
+        soa[c].push_back(positions[v][c]);
+        soa[3 + c].push_back(normals[v][c]);
+      }
+  }
+  BodyDrawInput input() const {
+    return BodyDrawInput{triangles, soa[0].data(), soa[1].data(), soa[2].data(), soa[3].data(), soa[4].data(),
+                         soa[5].data(), per_walker, per_walker, 2};
+  }
+};
+
+TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
+  const TwoBoxBodies boxes;
+  const std::vector<glm::vec3>& positions = boxes.positions;
+  const std::vector<std::uint32_t>& triangles = boxes.triangles;
+  const std::size_t per_walker = boxes.per_walker;
   renderer_->options().draw_ground = false;
   renderer_->options().draw_skeleton = false;
-  // The renderer takes the skin system's SoA: six component arrays, walker blocks `stride` apart.
-  std::vector<float> soa[6];
-  for (std::size_t v = 0; v < positions.size(); ++v)
-    for (int c = 0; c < 3; ++c) {
-      soa[c].push_back(positions[v][c]);
-      soa[3 + c].push_back(normals[v][c]);
-    }
-  BodyDrawInput bodies{triangles, soa[0].data(), soa[1].data(), soa[2].data(), soa[3].data(), soa[4].data(),
-                       soa[5].data(), per_walker, per_walker, 2};
+  BodyDrawInput bodies = boxes.input();
   const OrbitCamera camera = figure_camera();
   renderer_->render(SkeletonDrawInput{}, camera.view(), camera.projection(kAspect), &bodies);
   std::vector<std::uint8_t> image;
@@ -370,23 +385,14 @@ TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
 // blue; walker 0 with alpha 0 keeps the skin colour; and a later draw without colours is plain skin again (the
 // disabled attribute must not keep the last tint).
 TEST_F(RenderTest, PerVertexColoursTintOnlyWhereTheirAlphaSays) {
-  std::vector<glm::vec3> positions, normals;
-  std::vector<std::uint32_t> triangles;
-  add_box({-0.8f, 0.5f, -0.2f}, {-0.4f, 1.5f, 0.2f}, positions, normals, &triangles);
-  const std::size_t per_walker = positions.size();
-  add_box({0.4f, 0.3f, -0.2f}, {0.8f, 1.2f, 0.2f}, positions, normals, nullptr);
+  const TwoBoxBodies boxes;
+  const std::size_t per_walker = boxes.per_walker;
+  const std::vector<glm::vec3>& positions = boxes.positions;
   renderer_->options().draw_ground = false;
   renderer_->options().draw_skeleton = false;
-  std::vector<float> soa[6];
-  for (std::size_t v = 0; v < positions.size(); ++v)
-    for (int c = 0; c < 3; ++c) {
-      soa[c].push_back(positions[v][c]);
-      soa[3 + c].push_back(normals[v][c]);
-    }
   std::vector<std::uint32_t> rgba(positions.size(), 0x00ff0000u);  // blue, alpha 0: no tint
   for (std::size_t v = per_walker; v < positions.size(); ++v) rgba[v] = 0xffff0000u;  // blue, opaque
-  BodyDrawInput bodies{triangles, soa[0].data(), soa[1].data(), soa[2].data(), soa[3].data(), soa[4].data(),
-                       soa[5].data(), per_walker, per_walker, 2};
+  BodyDrawInput bodies = boxes.input();
   bodies.rgba = rgba.data();
   const OrbitCamera camera = figure_camera();
   const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
