@@ -134,20 +134,25 @@ std::vector<std::vector<JointWeight>> harmonic_weights(const Mesh& mesh, const S
     if (largest_step <= options.tolerance) break;
   }
 
+  // Soft threshold: every weight is lowered by min_weight and clamped at 0 before renormalising, so a joint fades
+  // out continuously where its weight falls to min_weight. A plain cut made a jump of min_weight there, and on
+  // the small triangles of the armpit a 1-2 % jump was enough to flip one in the walk.
+  const double soft = options.min_weight;
   for (std::uint32_t v : order) {
-    double sum = 0.0;
-    for (std::size_t s = 0; s < jn; ++s) sum += std::clamp(x[v * jn + s], 0.0, 1.0);
-    if (!(sum > 0.0)) continue;
+    double sum = 0.0, largest = -1.0;
+    std::size_t best = 0;
     for (std::size_t s = 0; s < jn; ++s) {
-      const double w = std::clamp(x[v * jn + s], 0.0, 1.0) / sum;
-      if (w >= options.min_weight) out[v].push_back({joints[s], w});
+      const double w = std::clamp(x[v * jn + s], 0.0, 1.0);
+      sum += std::max(w - soft, 0.0);
+      if (w > largest) largest = w, best = s;
     }
-    // Every weight below the cut (only possible with more than 1 / min_weight joints): keep the largest.
-    if (out[v].empty()) {
-      std::size_t best = 0;
-      for (std::size_t s = 1; s < jn; ++s)
-        if (x[v * jn + s] > x[v * jn + best]) best = s;
+    if (!(sum > 0.0)) {  // every weight within min_weight of 0 (more than 1 / min_weight joints): the largest
       out[v].push_back({joints[best], 1.0});
+      continue;
+    }
+    for (std::size_t s = 0; s < jn; ++s) {
+      const double w = std::max(std::clamp(x[v * jn + s], 0.0, 1.0) - soft, 0.0) / sum;
+      if (w > 0.0) out[v].push_back({joints[s], w});
     }
   }
   return out;

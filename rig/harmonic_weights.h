@@ -23,8 +23,10 @@ struct JointWeight {
 };
 
 struct HarmonicWeightOptions {
-  // Weights below this are dropped (as bone heat does), so a joint at the far side of the region does not add a
-  // sub-percent influence to every vertex.
+  // Every weight is lowered by this and clamped at 0 before the weights are renormalised (a soft threshold), so
+  // a joint at the far side of the region does not add a sub-percent influence to every vertex, and still fades
+  // out continuously. Measured over the default walk (strata report skin): a hard cut at 0.01 left the closest
+  // triangle at 8.8 % of its rest area at level 1 (5 % counts as collapsed), the soft one at 26 %.
   double min_weight = 0.01;
   // Successive over-relaxation: stop when no weight moves more than `tolerance` in a sweep, or after
   // `max_sweeps`. 1.9 converges in a few hundred sweeps on the groin of the finest default level (~60 edge rings
@@ -35,8 +37,8 @@ struct HarmonicWeightOptions {
 };
 
 // One list of (joint, weight) per mesh vertex: for every vertex with free[v] != 0 that is connected through free
-// vertices to a vertex with free == 0, the harmonic weights (each in [0, 1], summing to 1 before the min_weight
-// cut); empty for the others (fixed vertices, and free islands that touch no fixed vertex and so have nothing to
+// vertices to a vertex with free == 0, the harmonic weights (after the min_weight threshold, summing to 1);
+// empty for the others (fixed vertices, and free islands that touch no fixed vertex and so have nothing to
 // interpolate). Cotangent edge weights are clamped at 0 (an M-matrix: the maximum principle keeps every weight
 // between its smallest and largest boundary value, so no negative lobes). Deterministic: sequential sweeps in
 // vertex order. Throws std::invalid_argument when the sizes of mesh, binding and free differ.

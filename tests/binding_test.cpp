@@ -20,6 +20,7 @@
 #include "io/hanim_loader.h"
 #include "io/load_error.h"
 #include "rig/binding.h"
+#include "rig/harmonic_weights.h"
 #include "rig/body_generator.h"
 #include "rig/skin_metrics.h"
 #include "systems/fk.h"
@@ -141,6 +142,15 @@ std::set<int> joints_of(const SkinBinding& b, std::size_t v) {
   for (int k = 0; k < kMaxInfluences; ++k)
     if (b.weights[v][k] > 0.0f) s.insert(b.joints[v][k]);
   return s;
+}
+
+// The harmonic blend's soft threshold (rig/harmonic_weights.h min_weight) applied to exact weights.
+std::vector<double> soft_threshold(std::vector<double> w) {
+  const double c = HarmonicWeightOptions{}.min_weight;
+  double sum = 0.0;
+  for (double& x : w) sum += (x = std::max(x - c, 0.0));
+  for (double& x : w) x /= sum;
+  return w;
 }
 
 void expect_valid(const SkinBinding& b, std::size_t vertices, std::size_t joints) {
@@ -400,8 +410,8 @@ TEST(Binding, OverrideFalloffFadesIntoThePreviousBinding) {
   }
 }
 
-// On the arm capsule the harmonic field is exactly linear in y between the two rings around the box: the strip of
-// squares is flat, and the cotangent Laplacian reproduces linear functions there.
+// On the arm capsule the harmonic field is exactly linear in y between the two rings around the box (the strip of
+// squares is flat, and the cotangent Laplacian reproduces linear functions there), before the soft threshold.
 TEST(Binding, HarmonicOverrideInterpolatesLinearlyAlongTheArm) {
   const Skeleton sk = arm_skeleton();
   const Mesh mesh = arm_mesh();
@@ -420,7 +430,8 @@ TEST(Binding, HarmonicOverrideInterpolatesLinearlyAlongTheArm) {
     if (!selected[v]) continue;
     ++count;
     EXPECT_EQ(joints_of(b, v), (std::set<int>{shoulder, elbow})) << "y = " << y;
-    EXPECT_NEAR(weight_of(b, v, shoulder), (y - 0.99) / 0.22, 1e-4) << "y = " << y;
+    const double t = (y - 0.99) / 0.22;
+    EXPECT_NEAR(weight_of(b, v, shoulder), soft_threshold({t, 1.0 - t})[0], 1e-4) << "y = " << y;
   }
   EXPECT_EQ(count, 21u * 24u);
   expect_only_selected_changed(base, b, selected);
@@ -433,7 +444,7 @@ TEST(Binding, HarmonicOverrideInterpolatesLinearlyAlongTheArm) {
 // The field carries every joint around the region, as at the crotch of the default body, where sacroiliac and
 // both hips meet. Here the forearm alone is free: above it the upper arm's lowest ring, which step 2 blends between
 // shoulder and elbow, below it the hand (wrist). Harmonic data (a, 1 - a, 0) above and (0, 0, 1) below give
-// t (a, 1 - a, 0) + (1 - t) (0, 0, 1) with t linear in y. A region that touches no fixed vertex has nothing to
+// t (a, 1 - a, 0) + (1 - t) (0, 0, 1) with t linear in y, then the soft threshold. A region that touches no fixed vertex has nothing to
 // interpolate from and is left as it was.
 TEST(Binding, HarmonicOverrideCarriesEveryJointAroundItAndSkipsClosedRegions) {
   const Skeleton sk = arm_skeleton();
@@ -454,7 +465,7 @@ TEST(Binding, HarmonicOverrideCarriesEveryJointAroundItAndSkipsClosedRegions) {
   const double a = weight_of(base, top_vertex, shoulder);
   ASSERT_GT(a, 0.1);
   ASSERT_LT(a, 0.9);
-  std::size_t forearm = 0;
+  std::size_t forearm = 0, three = 0;
   for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
     if (mesh.part[v] != 1) {
       EXPECT_EQ(b.weights[v], base.weights[v]);
@@ -462,12 +473,18 @@ TEST(Binding, HarmonicOverrideCarriesEveryJointAroundItAndSkipsClosedRegions) {
     }
     ++forearm;
     const double t = (mesh.positions[v].y - bottom) / (top - bottom);
-    EXPECT_EQ(joints_of(b, v), (std::set<int>{shoulder, elbow, wrist})) << "y = " << mesh.positions[v].y;
-    EXPECT_NEAR(weight_of(b, v, shoulder), t * a, 1e-4) << "y = " << mesh.positions[v].y;
-    EXPECT_NEAR(weight_of(b, v, elbow), t * (1.0 - a), 1e-4) << "y = " << mesh.positions[v].y;
-    EXPECT_NEAR(weight_of(b, v, wrist), 1.0 - t, 1e-4) << "y = " << mesh.positions[v].y;
+    const std::vector<double> expected = soft_threshold({t * a, t * (1.0 - a), 1.0 - t});
+    std::set<int> expected_joints;
+    for (int k = 0; k < 3; ++k)
+      if (expected[static_cast<std::size_t>(k)] > 1e-3) expected_joints.insert(k == 0 ? shoulder : k == 1 ? elbow : wrist);
+    EXPECT_EQ(joints_of(b, v), expected_joints) << "y = " << mesh.positions[v].y;
+    three += expected_joints.size() == 3;
+    EXPECT_NEAR(weight_of(b, v, shoulder), expected[0], 1e-4) << "y = " << mesh.positions[v].y;
+    EXPECT_NEAR(weight_of(b, v, elbow), expected[1], 1e-4) << "y = " << mesh.positions[v].y;
+    EXPECT_NEAR(weight_of(b, v, wrist), expected[2], 1e-4) << "y = " << mesh.positions[v].y;
   }
   EXPECT_GT(forearm, 20u * 24u);
+  EXPECT_GT(three, forearm / 2);
 
   const SkinBinding closed = bind_three_step(
       mesh, sk, arm_tables(R"({"overrides": [{"box": {"min": [-1, 0, -1], "max": [1, 2, 1]}, "blend": "harmonic"}]})"));
