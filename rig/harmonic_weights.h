@@ -40,8 +40,9 @@ struct HarmonicWeightOptions {
 // vertices to a vertex with free == 0, the harmonic weights (after the min_weight threshold, summing to 1);
 // empty for the others (fixed vertices, and free islands that touch no fixed vertex and so have nothing to
 // interpolate). Cotangent edge weights are clamped at 0 (an M-matrix: the maximum principle keeps every weight
-// between its smallest and largest boundary value, so no negative lobes). Deterministic: sequential sweeps in
-// vertex order. Throws std::invalid_argument when the sizes of mesh, binding and free differ.
+// between its smallest and largest boundary value, so no negative lobes). A list may hold more than kMaxInfluences
+// joints; the binder keeps the four largest (the shipped selections never reach more than four). Deterministic:
+// sequential sweeps in vertex order. Throws std::invalid_argument when the sizes of mesh, binding and free differ.
 std::vector<std::vector<JointWeight>> harmonic_weights(const Mesh& mesh, const SkinBinding& binding,
                                                        std::span<const std::uint8_t> free,
                                                        const HarmonicWeightOptions& options = {});

@@ -444,8 +444,8 @@ TEST(Binding, HarmonicOverrideInterpolatesLinearlyAlongTheArm) {
 // The field carries every joint around the region, as at the crotch of the default body, where sacroiliac and
 // both hips meet. Here the forearm alone is free: above it the upper arm's lowest ring, which step 2 blends between
 // shoulder and elbow, below it the hand (wrist). Harmonic data (a, 1 - a, 0) above and (0, 0, 1) below give
-// t (a, 1 - a, 0) + (1 - t) (0, 0, 1) with t linear in y, then the soft threshold. A region that touches no fixed vertex has nothing to
-// interpolate from and is left as it was.
+// t (a, 1 - a, 0) + (1 - t) (0, 0, 1) with t linear in y, then the soft threshold. A region that touches no fixed
+// vertex has nothing to interpolate from and is left as it was.
 TEST(Binding, HarmonicOverrideCarriesEveryJointAroundItAndSkipsClosedRegions) {
   const Skeleton sk = arm_skeleton();
   const Mesh mesh = arm_mesh();
@@ -476,7 +476,8 @@ TEST(Binding, HarmonicOverrideCarriesEveryJointAroundItAndSkipsClosedRegions) {
     const std::vector<double> expected = soft_threshold({t * a, t * (1.0 - a), 1.0 - t});
     std::set<int> expected_joints;
     for (int k = 0; k < 3; ++k)
-      if (expected[static_cast<std::size_t>(k)] > 1e-3) expected_joints.insert(k == 0 ? shoulder : k == 1 ? elbow : wrist);
+      if (expected[static_cast<std::size_t>(k)] > 1e-3)
+        expected_joints.insert(k == 0 ? shoulder : k == 1 ? elbow : wrist);
     EXPECT_EQ(joints_of(b, v), expected_joints) << "y = " << mesh.positions[v].y;
     three += expected_joints.size() == 3;
     EXPECT_NEAR(weight_of(b, v, shoulder), expected[0], 1e-4) << "y = " << mesh.positions[v].y;
@@ -497,8 +498,9 @@ TEST(Binding, OverrideVertexIdOutOfRangeIsAnError) {
   const Mesh mesh = arm_mesh();
   EXPECT_THROW(bind_three_step(mesh, sk, arm_tables(R"({"overrides": [{"vertices": [99999]}]})")),
                std::invalid_argument);
-  EXPECT_THROW(bind_three_step(mesh, sk, arm_tables(R"({"overrides": [{"vertices": [1, 99999], "blend": "harmonic"}]})")),
-               std::invalid_argument);
+  EXPECT_THROW(
+      bind_three_step(mesh, sk, arm_tables(R"({"overrides": [{"vertices": [1, 99999], "blend": "harmonic"}]})")),
+      std::invalid_argument);
 }
 
 // ---- Table loading ------------------------------------------------------------------------------------------------
@@ -627,13 +629,14 @@ TEST(BindingTables, ShippedTablesBindTheDefaultBody) {
     bool inside = false;
     for (const SkinSelection& s : t.overrides) {
       if (s.blend != SkinSelection::Blend::Harmonic) continue;
-      const bool in_part = s.parts.empty() || std::find(s.parts.begin(), s.parts.end(), body.part_names[body.part[v]]) != s.parts.end();
-      const bool in_shape = s.kind == SkinSelection::Kind::Sphere
-                                ? glm::length(p - s.center) <= s.radius
-                                : glm::all(glm::greaterThanEqual(p, s.box_min)) && glm::all(glm::lessThanEqual(p, s.box_max));
+      const std::string& part = body.part_names[body.part[v]];
+      const bool in_part = s.parts.empty() || std::find(s.parts.begin(), s.parts.end(), part) != s.parts.end();
+      const bool in_box = glm::all(glm::greaterThanEqual(p, s.box_min)) && glm::all(glm::lessThanEqual(p, s.box_max));
+      const bool in_shape = s.kind == SkinSelection::Kind::Sphere ? glm::length(p - s.center) <= s.radius : in_box;
       inside = inside || (in_part && in_shape);
     }
-    EXPECT_TRUE(inside) << "vertex " << v << " has " << b.influence_count(v) << " joints outside every harmonic selection";
+    EXPECT_TRUE(inside) << "vertex " << v << " has " << b.influence_count(v)
+                        << " joints outside every harmonic selection";
   }
   const int shoulder = sk.find_joint("l_shoulder"), elbow = sk.find_joint("l_elbow");
   const auto forearm = static_cast<std::uint16_t>(
