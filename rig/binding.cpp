@@ -165,7 +165,8 @@ SkinSelection parse_selection(const Json& e, const std::string& source, std::siz
     if (s.falloff_m < 0.0f) throw LoadError(where + ": 'falloff_m' must not be negative");
   }
   if (s.blend == SkinSelection::Blend::Harmonic && (!s.joints.empty() || s.falloff_m > 0.0f))
-    throw LoadError(where + ": a harmonic blend takes its joints from around the selection: no 'joints' or 'falloff_m'");
+    throw LoadError(where +
+                    ": a harmonic blend takes its joints from around the selection: no 'joints' or 'falloff_m'");
   return s;
 }
 
