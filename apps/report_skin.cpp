@@ -13,12 +13,12 @@
 
 #include "apps/commands.h"
 #include "apps/json_output.h"
+#include "apps/skin_walk.h"
 #include "io/hanim_loader.h"
 #include "rig/binding.h"
 #include "rig/body_generator.h"
 #include "rig/skin_metrics.h"
 #include "systems/fk_reference.h"
-#include "systems/frame_script.h"
 #include "systems/skin_reference.h"
 
 namespace strata::cli {
@@ -39,34 +39,13 @@ struct Quality {
   double elbow_volume_change_pct = 0.0, knee_volume_change_pct = 0.0;
 };
 
-void accumulate(Quality& q, const SkinMetrics& m) {
-  q.inverted_triangles = std::max(q.inverted_triangles, m.inverted_triangles);
-  q.seam_gap_max_m = std::max(q.seam_gap_max_m, m.seam_gap_max_m);
-  q.nan_count += m.nan_count;
-}
-
 // Walks one walker through `seconds` and a 120 deg flexion of the left elbow and knee; measures every frame.
-Quality measure(const Rig& rig_template, const BodyLevel& level, const SkinReportOptions& o) {
+Quality measure(const Rig& rig, const BodyLevel& level, const SkinReportOptions& o) {
   Quality q;
-  Rig rig = rig_template;
-  auto body = std::make_shared<Body>();
-  body->levels.push_back(level);
-  rig.body = body;
-  CrowdScene scene(rig);
-  CrowdConfig config;
-  config.walkers = 1;
-  config.motion = MotionSource::Walk;
-  scene.spawn_crowd(config);
-  scene.set_body_level(-1);  // this report skins in humanoid space itself
-  Profiler profiler(8, false);
-  const auto frames = static_cast<int>(o.seconds * o.fps);
-  for (int f = 0; f < frames; ++f) {
-    scene.simulate(1.0f / o.fps, profiler);
-    const WalkerLanes lanes = scene.lanes();
-    const std::vector<glm::mat4> skinning = walker_skinning_matrices(lanes, 0);
-    const SkinnedVertices posed = skin_reference(level.mesh, level.binding, skinning);
-    accumulate(q, measure_skin(level.mesh, level.binding, skinning, posed.positions));
-  }
+  const WalkSkinMetrics walk = measure_walk_skin(rig, level, o.seconds, o.fps);
+  q.inverted_triangles = walk.inverted_triangles;
+  q.seam_gap_max_m = walk.seam_gap_max_m;
+  q.nan_count = walk.nan_count;
   const Skeleton& s = rig.skeleton;
   for (const char* name : {"l_elbow", "l_knee"}) {
     const int joint = s.find_joint(name);

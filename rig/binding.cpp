@@ -16,6 +16,7 @@
 
 #include "data/embedded.h"
 #include "io/load_error.h"
+#include "rig/harmonic_weights.h"
 
 namespace strata {
 namespace {
@@ -167,13 +168,18 @@ SkinSelection parse_selection(const Json& e, const std::string& source, std::siz
       s.blend = SkinSelection::Blend::Parent;
     else if (blend == "nearest_two")
       s.blend = SkinSelection::Blend::NearestTwo;
+    else if (blend == "harmonic")
+      s.blend = SkinSelection::Blend::Harmonic;
     else
-      throw LoadError(where + ": 'blend' must be \"parent\" or \"nearest_two\"");
+      throw LoadError(where + ": 'blend' must be \"parent\", \"nearest_two\" or \"harmonic\"");
   }
   if (e.contains("falloff_m")) {
     s.falloff_m = read_number(e, "falloff_m", where);
     if (s.falloff_m < 0.0f) throw LoadError(where + ": 'falloff_m' must not be negative");
   }
+  if (s.blend == SkinSelection::Blend::Harmonic && (!s.joints.empty() || s.falloff_m > 0.0f))
+    throw LoadError(where +
+                    ": a harmonic blend takes its joints from around the selection: no 'joints' or 'falloff_m'");
   return s;
 }
 
@@ -261,6 +267,31 @@ void apply_selection(const SkinSelection& s, const Mesh& mesh, const Skeleton& s
   std::vector<bool> part_ok(mesh.part_names.size(), s.parts.empty());
   for (std::size_t p = 0; p < mesh.part_names.size(); ++p)
     for (const std::string& name : s.parts) part_ok[p] = part_ok[p] || mesh.part_names[p] == name;
+
+  // Harmonic: the selection is the free region of harmonic_weights; its surroundings give the values.
+  if (s.blend == SkinSelection::Blend::Harmonic) {
+    std::vector<std::uint8_t> free(mesh.vertex_count(), 0);
+    auto in_parts = [&](std::size_t v) { return mesh.part.empty() || part_ok[mesh.part[v]]; };
+    if (s.kind == SkinSelection::Kind::Vertices) {
+      for (std::uint32_t v : s.vertices) {
+        if (v >= mesh.vertex_count())
+          throw std::invalid_argument("binding override '" + s.name + "': vertex " + std::to_string(v) +
+                                      " but the mesh has " + std::to_string(mesh.vertex_count()));
+        free[v] = in_parts(v);
+      }
+    } else {
+      for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
+        free[v] = in_parts(v) && selection_strength(s, mesh.positions[v]) > 0.0;
+    }
+    const std::vector<std::vector<JointWeight>> weights = harmonic_weights(mesh, binding, free);
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+      if (weights[v].empty()) continue;
+      std::vector<Influence> in;
+      for (const JointWeight& w : weights[v]) in.push_back({w.joint, w.weight});
+      set_influences(binding, v, std::move(in));
+    }
+    return;
+  }
 
   auto rebind = [&](std::size_t v, double strength) {
     if (strength <= 0.0) return;
@@ -491,7 +522,9 @@ std::string binding_overrides_json(std::span<const SkinSelection> overrides) {
     }
     if (!s.parts.empty()) e["parts"] = s.parts;
     if (!s.joints.empty()) e["joints"] = s.joints;
-    e["blend"] = s.blend == SkinSelection::Blend::NearestTwo ? "nearest_two" : "parent";
+    e["blend"] = s.blend == SkinSelection::Blend::NearestTwo ? "nearest_two"
+                 : s.blend == SkinSelection::Blend::Harmonic ? "harmonic"
+                                                              : "parent";
     e["falloff_m"] = float_json(s.falloff_m);
     list.push_back(std::move(e));
   }

@@ -8,7 +8,8 @@
 //     2. vertices within a per-joint distance of an elbow or knee are also bound to the adjacent joint
 //        (the elbow itself for an upper-arm vertex, the shoulder for a forearm vertex);
 //     3. hand-picked selections (data/binding_overrides.json) are re-bound to the closest joint and its parent
-//        with inverse-distance weights.
+//        with inverse-distance weights, or (beyond the paper) interpolated harmonically from the binding around
+//        them (rig/harmonic_weights.h).
 //   bind_automatic   bone heat (Baran & Popovic 2007): per joint, a heat-diffusion solve over the surface gives
 //     smooth weights with no table and no manual step.
 #include <cstdint>
@@ -29,7 +30,9 @@ namespace strata {
 // One step-3 selection (see data/binding_overrides.json for the file format and the meaning of each field).
 struct SkinSelection {
   enum class Kind : std::uint8_t { Vertices, Sphere, Box };
-  enum class Blend : std::uint8_t { Parent, NearestTwo };
+  // Harmonic: the selection's weights are interpolated from the vertices around it (rig/harmonic_weights.h);
+  // `joints` and `falloff_m` do not apply.
+  enum class Blend : std::uint8_t { Parent, NearestTwo, Harmonic };
   std::string name;
   Kind kind = Kind::Vertices;
   std::vector<std::uint32_t> vertices;  // Kind::Vertices

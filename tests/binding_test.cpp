@@ -20,6 +20,7 @@
 #include "io/hanim_loader.h"
 #include "io/load_error.h"
 #include "rig/binding.h"
+#include "rig/harmonic_weights.h"
 #include "rig/body_generator.h"
 #include "rig/skin_metrics.h"
 #include "systems/fk.h"
@@ -141,6 +142,15 @@ std::set<int> joints_of(const SkinBinding& b, std::size_t v) {
   for (int k = 0; k < kMaxInfluences; ++k)
     if (b.weights[v][k] > 0.0f) s.insert(b.joints[v][k]);
   return s;
+}
+
+// The harmonic blend's soft threshold (rig/harmonic_weights.h min_weight) applied to exact weights.
+std::vector<double> soft_threshold(std::vector<double> w) {
+  const double c = HarmonicWeightOptions{}.min_weight;
+  double sum = 0.0;
+  for (double& x : w) sum += (x = std::max(x - c, 0.0));
+  for (double& x : w) x /= sum;
+  return w;
 }
 
 void expect_valid(const SkinBinding& b, std::size_t vertices, std::size_t joints) {
@@ -400,11 +410,97 @@ TEST(Binding, OverrideFalloffFadesIntoThePreviousBinding) {
   }
 }
 
+// On the arm capsule the harmonic field is exactly linear in y between the two rings around the box (the strip of
+// squares is flat, and the cotangent Laplacian reproduces linear functions there), before the soft threshold.
+TEST(Binding, HarmonicOverrideInterpolatesLinearlyAlongTheArm) {
+  const Skeleton sk = arm_skeleton();
+  const Mesh mesh = arm_mesh();
+  const SkinBinding base = bind_three_step(mesh, sk, arm_tables());
+  // Box edges between rings (every 0.01 m): rings 1.00 .. 1.20 are free, 0.99 (forearm) and 1.21 (upper arm) fixed.
+  const SkinBinding b = bind_three_step(
+      mesh, sk, arm_tables(R"({"overrides": [{"box": {"min": [-1, 0.995, -1], "max": [1, 1.205, 1]},
+                                                "blend": "harmonic"}]})"));
+  expect_valid(b, mesh.vertex_count(), sk.joint_count());
+  const int shoulder = sk.find_joint("l_shoulder"), elbow = sk.find_joint("l_elbow");
+  std::vector<bool> selected(mesh.vertex_count(), false);
+  std::size_t count = 0;
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const float y = mesh.positions[v].y;
+    selected[v] = y > 0.995f && y < 1.205f;
+    if (!selected[v]) continue;
+    ++count;
+    EXPECT_EQ(joints_of(b, v), (std::set<int>{shoulder, elbow})) << "y = " << y;
+    const double t = (y - 0.99) / 0.22;
+    EXPECT_NEAR(weight_of(b, v, shoulder), soft_threshold({t, 1.0 - t})[0], 1e-4) << "y = " << y;
+  }
+  EXPECT_EQ(count, 21u * 24u);
+  expect_only_selected_changed(base, b, selected);
+  // Step 2 alone blends the same joints over a narrower band (its sphere, 1.03 .. 1.17).
+  std::size_t base_blended = 0;
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) base_blended += selected[v] && base.influence_count(v) == 2;
+  EXPECT_LT(base_blended, count);
+}
+
+// The field carries every joint around the region, as at the crotch of the default body, where sacroiliac and
+// both hips meet. Here the forearm alone is free: above it the upper arm's lowest ring, which step 2 blends between
+// shoulder and elbow, below it the hand (wrist). Harmonic data (a, 1 - a, 0) above and (0, 0, 1) below give
+// t (a, 1 - a, 0) + (1 - t) (0, 0, 1) with t linear in y, then the soft threshold. A region that touches no fixed
+// vertex has nothing to interpolate from and is left as it was.
+TEST(Binding, HarmonicOverrideCarriesEveryJointAroundItAndSkipsClosedRegions) {
+  const Skeleton sk = arm_skeleton();
+  const Mesh mesh = arm_mesh();
+  const SkinBinding base = bind_three_step(mesh, sk, arm_tables());
+  const int shoulder = sk.find_joint("l_shoulder"), elbow = sk.find_joint("l_elbow"), wrist = sk.find_joint("l_wrist");
+  const SkinBinding b = bind_three_step(
+      mesh, sk, arm_tables(R"({"overrides": [{"box": {"min": [-1, 0, -1], "max": [1, 2, 1]}, "parts": ["lForeArm"],
+                                                "blend": "harmonic"}]})"));
+  expect_valid(b, mesh.vertex_count(), sk.joint_count());
+  float top = 1e9f, bottom = -1e9f;  // the fixed rings next to the forearm
+  std::size_t top_vertex = 0;
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const float y = mesh.positions[v].y;
+    if (mesh.part[v] == 0 && y < top) top = y, top_vertex = v;
+    if (mesh.part[v] == 2) bottom = std::max(bottom, y);
+  }
+  const double a = weight_of(base, top_vertex, shoulder);
+  ASSERT_GT(a, 0.1);
+  ASSERT_LT(a, 0.9);
+  std::size_t forearm = 0, three = 0;
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    if (mesh.part[v] != 1) {
+      EXPECT_EQ(b.weights[v], base.weights[v]);
+      continue;
+    }
+    ++forearm;
+    const double t = (mesh.positions[v].y - bottom) / (top - bottom);
+    const std::vector<double> expected = soft_threshold({t * a, t * (1.0 - a), 1.0 - t});
+    std::set<int> expected_joints;
+    for (int k = 0; k < 3; ++k)
+      if (expected[static_cast<std::size_t>(k)] > 1e-3)
+        expected_joints.insert(k == 0 ? shoulder : k == 1 ? elbow : wrist);
+    EXPECT_EQ(joints_of(b, v), expected_joints) << "y = " << mesh.positions[v].y;
+    three += expected_joints.size() == 3;
+    EXPECT_NEAR(weight_of(b, v, shoulder), expected[0], 1e-4) << "y = " << mesh.positions[v].y;
+    EXPECT_NEAR(weight_of(b, v, elbow), expected[1], 1e-4) << "y = " << mesh.positions[v].y;
+    EXPECT_NEAR(weight_of(b, v, wrist), expected[2], 1e-4) << "y = " << mesh.positions[v].y;
+  }
+  EXPECT_GT(forearm, 20u * 24u);
+  EXPECT_GT(three, forearm / 2);
+
+  const SkinBinding closed = bind_three_step(
+      mesh, sk, arm_tables(R"({"overrides": [{"box": {"min": [-1, 0, -1], "max": [1, 2, 1]}, "blend": "harmonic"}]})"));
+  EXPECT_EQ(closed.joints, base.joints);
+  EXPECT_EQ(closed.weights, base.weights);
+}
+
 TEST(Binding, OverrideVertexIdOutOfRangeIsAnError) {
   const Skeleton sk = arm_skeleton();
   const Mesh mesh = arm_mesh();
   EXPECT_THROW(bind_three_step(mesh, sk, arm_tables(R"({"overrides": [{"vertices": [99999]}]})")),
                std::invalid_argument);
+  EXPECT_THROW(
+      bind_three_step(mesh, sk, arm_tables(R"({"overrides": [{"vertices": [1, 99999], "blend": "harmonic"}]})")),
+      std::invalid_argument);
 }
 
 // ---- Table loading ------------------------------------------------------------------------------------------------
@@ -438,6 +534,10 @@ TEST(BindingTables, LoaderErrorsNameFileAndEntry) {
   expect_load_error("", R"({"overrides": [{"vertices": [1], "parts": ["arm"]}]})", "unknown part 'arm'");
   expect_load_error("", R"({"overrides": [{"vertices": [1], "blend": "average"}]})", "'blend'");
   expect_load_error("", R"({"overrides": [{"vertices": [1], "falloff_m": -0.1}]})", "falloff_m");
+  expect_load_error("", R"({"overrides": [{"vertices": [1], "blend": "harmonic", "joints": ["l_elbow"]}]})",
+                    "overrides[0]: a harmonic blend takes its joints from around the selection");
+  expect_load_error("", R"({"overrides": [{"vertices": [1], "blend": "harmonic", "falloff_m": 0.02}]})",
+                    "no 'joints' or 'falloff_m'");
   expect_load_error("", R"({"overrides": [{"vertices": [1], "radius": 2}]})", "unknown key 'radius'");
 }
 
@@ -521,7 +621,23 @@ TEST(BindingTables, ShippedTablesBindTheDefaultBody) {
   // The paper's Table 1 shape: most vertices follow one joint, a band around the joints follows two.
   EXPECT_GT(stats.one_joint, stats.two_joints);
   EXPECT_GT(stats.two_joints, body.vertex_count() / 50);
-  EXPECT_EQ(stats.more_joints, 0u) << "the shipped steps never stack more than two joints";
+  // Three or four joints only where a harmonic selection meets them (the crotch: sacroiliac and both hips).
+  EXPECT_GT(stats.more_joints, 0u);
+  for (std::size_t v = 0; v < body.vertex_count(); ++v) {
+    if (b.influence_count(v) <= 2) continue;
+    const glm::vec3 p = body.positions[v];
+    bool inside = false;
+    for (const SkinSelection& s : t.overrides) {
+      if (s.blend != SkinSelection::Blend::Harmonic) continue;
+      const std::string& part = body.part_names[body.part[v]];
+      const bool in_part = s.parts.empty() || std::find(s.parts.begin(), s.parts.end(), part) != s.parts.end();
+      const bool in_box = glm::all(glm::greaterThanEqual(p, s.box_min)) && glm::all(glm::lessThanEqual(p, s.box_max));
+      const bool in_shape = s.kind == SkinSelection::Kind::Sphere ? glm::length(p - s.center) <= s.radius : in_box;
+      inside = inside || (in_part && in_shape);
+    }
+    EXPECT_TRUE(inside) << "vertex " << v << " has " << b.influence_count(v)
+                        << " joints outside every harmonic selection";
+  }
   const int shoulder = sk.find_joint("l_shoulder"), elbow = sk.find_joint("l_elbow");
   const auto forearm = static_cast<std::uint16_t>(
       std::find(body.part_names.begin(), body.part_names.end(), "lForeArm") - body.part_names.begin());
