@@ -64,10 +64,6 @@ float ViewSession::advance(float real_dt, Profiler& profiler) {
   return static_cast<float>(steps) * kStep;
 }
 
-}  // namespace strata::cli
-
-namespace strata::cli {
-
 namespace {
 
 // The body with one level's weights replaced (meshes and cage copied; its subdivision cache starts empty).
