@@ -22,6 +22,7 @@ add_library(strata_fuzz_loaders STATIC
   io/makehuman.cpp
   io/gltf.cpp
   rig/binding.cpp
+  rig/harmonic_weights.cpp
   io/muscle_file.cpp
   rig/muscle_binding.cpp
   ${STRATA_EMBED_CPP})
