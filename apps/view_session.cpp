@@ -211,6 +211,8 @@ void ViewSession::block_positions(std::size_t block, std::vector<glm::vec3>& out
 void ViewSession::binding_mouse(const EditorMouse& m, const glm::mat4& view_projection, glm::ivec2 viewport) {
   BindingEditState& b = panel_.binding;
   b.cursor = m.cursor;
+  // A minimised window has an empty framebuffer: nothing to pick on (and pick_ray would refuse it).
+  if (viewport.x <= 0 || viewport.y <= 0) return;
   if (!editor_ || block_count() == 0 || scene_->skin_layout().original.empty()) return;
   const Mesh& mesh = scene_->rig().body->levels[static_cast<std::size_t>(b.level)].mesh;
   const SelectOp op = m.shift ? SelectOp::Add : m.ctrl ? SelectOp::Subtract : SelectOp::Replace;

@@ -424,6 +424,10 @@ TEST(BindingEditorSession, BrushPaintsAlongTheDrag) {
   rig.session.binding_mouse(m, rig.view_projection, rig.viewport);
   EXPECT_GT(b.selected, 3 * dab) << "a stroke covers more than one dab";
   EXPECT_FALSE(b.dragging);
+  // A minimised window (empty framebuffer) picks nothing and throws nothing.
+  m = {};
+  m.pressed = m.down = true;
+  EXPECT_NO_THROW(rig.session.binding_mouse(m, rig.view_projection, {0, 0}));
 }
 
 TEST(BindingEditorSession, StartsFromTheOverridesFileTheSceneWasBoundWith) {
