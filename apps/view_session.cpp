@@ -30,7 +30,16 @@ bool ViewSession::apply_crowd_request() {
   next.walkers = static_cast<std::size_t>(std::max(panel_.walkers, 1));
   next.seed = static_cast<std::uint64_t>(std::max(panel_.seed, 0));
   next.level = scene_->body_level();
-  std::unique_ptr<CrowdScene> built = build_scene(next);
+  std::unique_ptr<CrowdScene> built;
+  try {
+    built = build_scene(next);
+  } catch (const std::exception& e) {
+    // The viewer keeps the crowd it has rather than closing over a request it cannot meet.
+    panel_.binding.rest_pose = options_.rest;
+    panel_.last_message = std::string("no new crowd: ") + e.what();
+    if (was_editing) start_editing();
+    return false;
+  }
   // What the user tuned at run time survives a new crowd; the crowd itself (count, seed) is what changes.
   built->lod_policy() = scene_->lod_policy();
   built->style() = scene_->style();

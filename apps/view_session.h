@@ -40,7 +40,8 @@ class ViewSession {
 
   // Handles the panel's request for a new crowd: rebuilt with the panel's walker count and seed, keeping the body
   // level, level-of-detail policy, gait style, muscle switch and gains. True when the scene was replaced (the
-  // caller reframes the camera; references into the old scene are gone).
+  // caller reframes the camera; references into the old scene are gone). When the new crowd cannot be built the
+  // old one stays and panel().last_message says why.
   bool apply_crowd_request();
 
   // Advances the simulation for `real_dt` seconds of wall time: scaled by the panel's time scale while running;

@@ -229,6 +229,27 @@ TEST_F(UiTest, BindingTabStartsAndStopsTheEditor) {
   EXPECT_FALSE(session_->panel().binding.active);
 }
 
+TEST(ViewSessionCrowd, AFailedNewCrowdKeepsTheOldOneAndSaysWhy) {
+  // A skeleton file that disappears after the first crowd was built from it.
+  const auto path = std::filesystem::temp_directory_path() / "strata_ui_test_skeleton.x3d";
+  std::filesystem::copy_file(std::filesystem::path(STRATA_TEST_DATA) / "../../data/default_skeleton.x3d", path,
+                             std::filesystem::copy_options::overwrite_existing);
+  cli::SceneOptions o;
+  o.walkers = 2;
+  o.threads = 1;
+  o.skeleton = path.string();
+  cli::ViewSession session(o);
+  std::filesystem::remove(path);
+  session.panel().walkers = 5;
+  session.panel().rebuild_requested = true;
+  EXPECT_FALSE(session.apply_crowd_request());
+  EXPECT_EQ(session.scene().walker_count(), 2u);
+  EXPECT_NE(session.panel().last_message.find("no new crowd"), std::string::npos) << session.panel().last_message;
+  EXPECT_NE(session.panel().last_message.find(path.filename().string()), std::string::npos)
+      << "the reason names the file";
+  EXPECT_FALSE(session.panel().rebuild_requested) << "one failed request is not retried every frame";
+}
+
 TEST(TimingHistory, KeepsTheLastFramesOfEverySystemInFrameOrder) {
   cli::SceneOptions options;
   options.walkers = 2;
