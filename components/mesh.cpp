@@ -1,5 +1,6 @@
 #include "components/mesh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -73,6 +74,44 @@ void validate_mesh(const Mesh& mesh, std::string_view source) {
     if (mesh.part[v] >= mesh.part_names.size())
       throw LoadError(where + ": vertex " + std::to_string(v) + " has part " + std::to_string(mesh.part[v]) +
                       " but only " + std::to_string(mesh.part_names.size()) + " parts are named");
+}
+
+CotangentEdges cotangent_edges(const Mesh& mesh, std::span<const std::uint8_t> rows,
+                               std::vector<double>* vertex_areas) {
+  const std::size_t n = mesh.vertex_count();
+  const bool all_rows = rows.empty();
+  CotangentEdges out(n);
+  if (vertex_areas) vertex_areas->assign(n, 0.0);
+  auto add = [&](std::uint32_t a, std::uint32_t b, double w) {
+    if (!all_rows && !rows[a]) return;
+    for (auto& [c, cw] : out[a])
+      if (c == b) {
+        cw += w;
+        return;
+      }
+    out[a].emplace_back(b, w);
+  };
+  for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
+    const std::uint32_t idx[3] = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
+    if (!vertex_areas && !all_rows && !rows[idx[0]] && !rows[idx[1]] && !rows[idx[2]]) continue;
+    const glm::dvec3 q[3] = {glm::dvec3(mesh.positions[idx[0]]), glm::dvec3(mesh.positions[idx[1]]),
+                             glm::dvec3(mesh.positions[idx[2]])};
+    const double twice_area = glm::length(glm::cross(q[1] - q[0], q[2] - q[0]));
+    if (!(twice_area > 1e-20)) continue;
+    for (int k = 0; k < 3; ++k) {
+      if (vertex_areas) (*vertex_areas)[idx[k]] += twice_area / 6.0;
+      // The angle at corner k faces the edge (k+1, k+2): cot = dot / |cross|, and |cross| is twice the area.
+      const glm::dvec3 e1 = q[(k + 1) % 3] - q[k], e2 = q[(k + 2) % 3] - q[k];
+      const double half_cot = 0.5 * glm::dot(e1, e2) / twice_area;
+      add(idx[(k + 1) % 3], idx[(k + 2) % 3], half_cot);
+      add(idx[(k + 2) % 3], idx[(k + 1) % 3], half_cot);
+    }
+  }
+  for (auto& list : out) {
+    for (auto& [u, w] : list) w = std::max(w, 0.0);
+    std::sort(list.begin(), list.end());
+  }
+  return out;
 }
 
 }  // namespace strata

@@ -3,8 +3,10 @@
 // Immutable rig data, built once by generators, importers and binders (rig/, io/), shared by every walker.
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -47,6 +49,17 @@ struct SkinBinding {
 // Area-weighted vertex normals from the triangles (degenerate triangles contribute nothing; a vertex with no
 // usable triangle gets +Y so no NaN leaves).
 void compute_normals(Mesh& mesh);
+
+// The cotangent Laplacian's edge weights, for the two weight solvers over the skin (rig/binding.cpp's bone heat
+// and rig/harmonic_weights.cpp): per vertex, its neighbours u with w = sum over the edge's triangles of
+// cot(opposite angle) / 2, clamped at 0 after summing (two obtuse opposite angles give a negative sum, which would
+// break the maximum principle both solvers rely on), sorted by u so sweeps visit neighbours in a fixed order.
+// Clamped edges stay in the list with weight 0 (they still say who is adjacent). Only vertices with rows[v] != 0
+// get a list (all when `rows` is empty). `vertex_areas`, when given, receives each vertex's barycentric area (a
+// third of every adjacent triangle's). Degenerate triangles contribute nothing.
+using CotangentEdges = std::vector<std::vector<std::pair<std::uint32_t, double>>>;
+CotangentEdges cotangent_edges(const Mesh& mesh, std::span<const std::uint8_t> rows = {},
+                               std::vector<double>* vertex_areas = nullptr);
 
 // Checks a mesh a loader produced and throws LoadError "SOURCE: <what>: reason" naming the first problem:
 // index out of range, non-finite coordinate, per-vertex arrays of the wrong length, empty mesh, part index out of

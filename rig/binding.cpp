@@ -714,31 +714,8 @@ SkinBinding bind_automatic(const Mesh& mesh, const Skeleton& skeleton, const Aut
   }
 
   // Cotangent Laplacian and barycentric vertex areas.
-  std::vector<double> area(n, 0.0);
-  std::vector<std::vector<std::pair<std::uint32_t, double>>> edges(n);
-  auto add_edge = [&](std::uint32_t a, std::uint32_t b, double w) {
-    for (auto& [c, cw] : edges[a])
-      if (c == b) {
-        cw += w;
-        return;
-      }
-    edges[a].emplace_back(b, w);
-  };
-  for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
-    const std::uint32_t idx[3] = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
-    const glm::dvec3 q[3] = {glm::dvec3(mesh.positions[idx[0]]), glm::dvec3(mesh.positions[idx[1]]),
-                             glm::dvec3(mesh.positions[idx[2]])};
-    const double twice_area = glm::length(glm::cross(q[1] - q[0], q[2] - q[0]));
-    if (!(twice_area > 1e-20)) continue;
-    for (int k = 0; k < 3; ++k) {
-      area[idx[k]] += twice_area / 6.0;
-      // The angle at corner k faces edge (k+1, k+2): cot = dot / |cross|, and |cross| is twice the area.
-      const glm::dvec3 e1 = q[(k + 1) % 3] - q[k], e2 = q[(k + 2) % 3] - q[k];
-      const double half_cot = 0.5 * glm::dot(e1, e2) / twice_area;
-      add_edge(idx[(k + 1) % 3], idx[(k + 2) % 3], half_cot);
-      add_edge(idx[(k + 2) % 3], idx[(k + 1) % 3], half_cot);
-    }
-  }
+  std::vector<double> area;
+  const CotangentEdges edges = cotangent_edges(mesh, {}, &area);
   SparseSym K;
   K.offsets.assign(1, 0);
   K.diagonal.assign(n, 0.0);
@@ -749,15 +726,13 @@ SkinBinding bind_automatic(const Mesh& mesh, const Skeleton& skeleton, const Aut
     } else {
       screen[v] = area[v] * options.heat / (heat_distance[v] * heat_distance[v]);
       K.diagonal[v] = screen[v];
-      std::sort(edges[v].begin(), edges[v].end());
       for (const auto& [u, w] : edges[v]) {
-        // Obtuse pairs give negative cotangent sums; clamping them keeps the matrix an M-matrix, so weights obey
-        // the maximum principle (no negative lobes) at the price of a slightly less exact Laplacian.
-        const double wc = std::max(w, 0.0);
-        if (wc == 0.0) continue;
+        // cotangent_edges clamps obtuse pairs' negative sums at 0, which keeps the matrix an M-matrix, so weights
+        // obey the maximum principle (no negative lobes) at the price of a slightly less exact Laplacian.
+        if (w == 0.0) continue;
         K.cols.push_back(u);
-        K.values.push_back(-wc);
-        K.diagonal[v] += wc;
+        K.values.push_back(-w);
+        K.diagonal[v] += w;
       }
     }
     K.offsets.push_back(K.cols.size());

@@ -5,50 +5,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include <glm/geometric.hpp>
-
 namespace strata {
-namespace {
-
-// Edges of the free vertices with their cotangent weights (cot a + cot b) / 2, summed over the edge's triangles.
-using Neighbours = std::vector<std::vector<std::pair<std::uint32_t, double>>>;
-
-Neighbours cotangent_neighbours(const Mesh& mesh, std::span<const std::uint8_t> free) {
-  Neighbours out(mesh.vertex_count());
-  auto add = [&](std::uint32_t a, std::uint32_t b, double w) {
-    if (!free[a]) return;
-    for (auto& [c, cw] : out[a])
-      if (c == b) {
-        cw += w;
-        return;
-      }
-    out[a].emplace_back(b, w);
-  };
-  for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
-    const std::uint32_t idx[3] = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
-    if (!free[idx[0]] && !free[idx[1]] && !free[idx[2]]) continue;
-    const glm::dvec3 q[3] = {glm::dvec3(mesh.positions[idx[0]]), glm::dvec3(mesh.positions[idx[1]]),
-                             glm::dvec3(mesh.positions[idx[2]])};
-    const double twice_area = glm::length(glm::cross(q[1] - q[0], q[2] - q[0]));
-    if (!(twice_area > 1e-20)) continue;
-    for (int k = 0; k < 3; ++k) {
-      // The angle at corner k faces the edge (k+1, k+2); cot = dot / |cross|.
-      const glm::dvec3 e1 = q[(k + 1) % 3] - q[k], e2 = q[(k + 2) % 3] - q[k];
-      const double half_cot = 0.5 * glm::dot(e1, e2) / twice_area;
-      add(idx[(k + 1) % 3], idx[(k + 2) % 3], half_cot);
-      add(idx[(k + 2) % 3], idx[(k + 1) % 3], half_cot);
-    }
-  }
-  // Clamp after summing both sides of each edge: a sum below 0 (two obtuse opposite angles) would break the
-  // maximum principle. Sorted so the sweeps visit neighbours in a fixed order.
-  for (auto& list : out) {
-    for (auto& [u, w] : list) w = std::max(w, 0.0);
-    std::sort(list.begin(), list.end());
-  }
-  return out;
-}
-
-}  // namespace
 
 std::vector<std::vector<JointWeight>> harmonic_weights(const Mesh& mesh, const SkinBinding& binding,
                                                        std::span<const std::uint8_t> free,
@@ -57,7 +14,7 @@ std::vector<std::vector<JointWeight>> harmonic_weights(const Mesh& mesh, const S
   if (binding.vertex_count() != n || free.size() != n)
     throw std::invalid_argument("harmonic_weights: mesh, binding and free mask differ in vertex count");
   std::vector<std::vector<JointWeight>> out(n);
-  const Neighbours neighbours = cotangent_neighbours(mesh, free);
+  const CotangentEdges neighbours = cotangent_edges(mesh, free);
 
   // Free vertices that reach a fixed one through free vertices: the others have no boundary value to take.
   std::vector<std::uint8_t> solvable(n, 0);
