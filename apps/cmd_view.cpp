@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <span>
 #include <sstream>
 
 #include "apps/commands.h"
@@ -56,6 +57,28 @@ std::string timing_title(const Profiler& profiler, double fps) {
   return title.str();
 }
 
+// Draws the session's scene from `camera` (bodies in the binding editor's colours while it runs) and hands the
+// camera to culling and --level auto for the next frame. `joints`: gather_joint_positions of this frame.
+void render_scene(ViewSession& session, SkeletonRenderer& renderer, const OrbitCamera& camera, float aspect,
+                  int viewport_height, std::span<const glm::vec3> joints) {
+  CrowdScene& scene = session.scene();
+  std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
+  session.colour_draws(bodies);
+  ViewPanelState& panel = session.panel();
+  renderer.options().draw_skeleton = bodies.empty() || panel.show_skeleton;
+  renderer.render({&scene.rig().skeleton, joints, scene.walker_count()}, camera.view(), camera.projection(aspect),
+                  bodies);
+  panel.triangles_drawn = renderer.triangles_drawn();
+  scene.set_view(lod_view(camera, aspect, viewport_height));
+}
+
+// Frames per second from the profiler's rolling mean frame time; 0 before the first frame.
+float mean_fps(const Profiler& profiler) {
+  for (const SystemStats& s : profiler.stats())
+    if (s.name == "frame" && s.mean_ms > 0) return static_cast<float>(1000.0 / s.mean_ms);
+  return 0.0f;
+}
+
 // Applies --tab and --edit-binding to a new session.
 void apply_start_options(const ViewOptions& o, ViewSession& session) {
   ViewPanelState& panel = session.panel();
@@ -96,13 +119,7 @@ int run_view_headless(const ViewOptions& o) {
         gather_joint_positions(scene.lanes(), joints);
         glm::vec3 lo, hi;
         if (f == 0 && (body_bounds(scene, lo, hi) || joint_bounds(joints, lo, hi))) camera.frame_box(lo, hi, aspect);
-        std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
-        session.colour_draws(bodies);
-        renderer.options().draw_skeleton = bodies.empty() || panel.show_skeleton;
-        renderer.render({&scene.rig().skeleton, joints, scene.walker_count()}, camera.view(), camera.projection(aspect),
-                        bodies);
-        panel.triangles_drawn = renderer.triangles_drawn();
-        scene.set_view(lod_view(camera, aspect, o.height));
+        render_scene(session, renderer, camera, aspect, o.height, joints);
         if (ui) {
           STRATA_PROFILE_SCOPE(profiler, "ui");
           UiFrameInput in;
@@ -114,8 +131,7 @@ int run_view_headless(const ViewOptions& o) {
       }
       profiler.end_frame();
       panel.timings.push(profiler);
-      for (const SystemStats& s : profiler.stats())
-        if (s.name == "frame" && s.mean_ms > 0) panel.fps = static_cast<float>(1000.0 / s.mean_ms);
+      panel.fps = mean_fps(profiler);
     }
     std::vector<std::uint8_t> pixels;
     renderer.read_rgba(pixels);
@@ -204,8 +220,6 @@ int run_view(const ViewOptions& o) {
           framed = true;
           panel.frame_camera_requested = false;
         }
-        SkeletonDrawInput draw{&scene.rig().skeleton, joints, scene.walker_count()};
-        std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
         if (editing) {
           // The mouse in framebuffer pixels (they differ from window units on HiDPI screens).
           const glm::ivec2 ws = window.window_size();
@@ -220,12 +234,8 @@ int run_view(const ViewOptions& o) {
           mouse.ctrl = input.ctrl;
           session.binding_mouse(mouse, camera.projection(aspect) * camera.view(), fb);
           panel.binding.pixels_per_unit = scale;  // the outline is drawn in window units
-          session.colour_draws(bodies);
         }
-        renderer.options().draw_skeleton = bodies.empty() || panel.show_skeleton;
-        renderer.render(draw, camera.view(), camera.projection(aspect), bodies);
-        panel.triangles_drawn = renderer.triangles_drawn();
-        scene.set_view(lod_view(camera, aspect, fb.y));  // culling and --level auto follow the orbit camera
+        render_scene(session, renderer, camera, aspect, fb.y, joints);
         if (panel.screenshot_requested) {
           panel.screenshot_requested = false;
           // The scene without the panel: a screenshot is for showing the crowd, not the tool.
@@ -254,11 +264,7 @@ int run_view(const ViewOptions& o) {
       panel.timings.push(profiler);
       ++frame;
       if (now - title_time > std::chrono::milliseconds(500)) {
-        auto stats = profiler.stats();
-        double frame_ms = 0;
-        for (const auto& s : stats)
-          if (s.name == "frame") frame_ms = s.mean_ms;
-        panel.fps = frame_ms > 0 ? static_cast<float>(1000.0 / frame_ms) : 0.0f;
+        panel.fps = mean_fps(profiler);
         std::fprintf(stderr, "\r%s   ", timing_title(profiler, panel.fps).c_str());
         title_time = now;
       }
