@@ -12,7 +12,8 @@
 
 #include "apps/commands.h"
 #include "apps/json_output.h"
-#include "apps/crowd_setup.h"
+#include "apps/scene_options.h"
+#include "render/scene_draw.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
 #include "render/skeleton_renderer.h"

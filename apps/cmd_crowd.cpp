@@ -13,7 +13,8 @@
 
 #include "apps/commands.h"
 #include "apps/json_output.h"
-#include "apps/crowd_setup.h"
+#include "apps/scene_options.h"
+#include "render/scene_draw.h"
 #include "apps/crowd_outputs.h"
 #include "io/image_writer.h"
 #include "profiling/profiler.h"
@@ -21,7 +22,7 @@
 #include "systems/animation_sample.h"
 #include "render/gl_context.h"
 #include "render/skeleton_renderer.h"
-#include "systems/frame_script.h"
+#include "scene/crowd_scene.h"
 #include "systems/pose_gather.h"
 
 namespace strata::cli {

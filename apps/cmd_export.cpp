@@ -11,7 +11,7 @@
 #include "apps/commands.h"
 #include "io/gltf_export.h"
 #include "io/hanim_loader.h"
-#include "motion/walk_bake.h"
+#include "scene/walk_bake.h"
 #include "rig/body_rig.h"
 
 namespace strata::cli {

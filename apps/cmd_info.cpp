@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "apps/commands.h"
-#include "apps/crowd_setup.h"
+#include "scene/scene_setup.h"
 #include "io/bvh.h"
 #include "io/hanim_loader.h"
 #include "io/obj.h"

@@ -8,7 +8,8 @@
 
 #include "apps/commands.h"
 #include "apps/json_output.h"
-#include "apps/crowd_setup.h"
+#include "apps/scene_options.h"
+#include "render/scene_draw.h"
 #include "systems/gait_metrics.h"
 
 namespace strata::cli {

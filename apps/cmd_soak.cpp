@@ -15,7 +15,8 @@
 #include <thread>
 
 #include "apps/commands.h"
-#include "apps/crowd_setup.h"
+#include "apps/scene_options.h"
+#include "render/scene_draw.h"
 #include "apps/json_output.h"
 #include "profiling/profiler.h"
 #include "render/camera.h"

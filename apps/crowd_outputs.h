@@ -11,7 +11,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "systems/frame_script.h"
+#include "scene/crowd_scene.h"
 
 namespace strata::cli {
 

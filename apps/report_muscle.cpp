@@ -14,7 +14,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "apps/commands.h"
-#include "apps/crowd_setup.h"
+#include "scene/scene_setup.h"
 #include "apps/json_output.h"
 #include "io/image_writer.h"
 #include "render/camera.h"
@@ -23,7 +23,7 @@
 #include "systems/fk.h"
 #include "systems/muscle.h"
 #include "systems/pose_gather.h"
-#include "systems/skin_reference.h"
+#include "reference/skin_reference.h"
 
 namespace strata::cli {
 namespace {

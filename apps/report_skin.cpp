@@ -13,13 +13,13 @@
 
 #include "apps/commands.h"
 #include "apps/json_output.h"
-#include "apps/skin_walk.h"
+#include "reference/skin_walk.h"
 #include "io/hanim_loader.h"
 #include "rig/binding.h"
 #include "rig/body_generator.h"
-#include "rig/skin_metrics.h"
-#include "systems/fk_reference.h"
-#include "systems/skin_reference.h"
+#include "reference/skin_metrics.h"
+#include "reference/fk_reference.h"
+#include "reference/skin_reference.h"
 
 namespace strata::cli {
 namespace {

@@ -24,7 +24,7 @@
 #include "rig/body_rig.h"
 #include "rig/subdiv_refiner.h"
 #include "systems/fk.h"
-#include "systems/frame_script.h"
+#include "scene/crowd_scene.h"
 #include "systems/subdiv.h"
 
 namespace strata::cli {

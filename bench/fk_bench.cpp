@@ -9,7 +9,7 @@
 #include "io/hanim_loader.h"
 #include "systems/animation_sample.h"
 #include "systems/fk.h"
-#include "systems/frame_script.h"
+#include "scene/crowd_scene.h"
 
 namespace {
 

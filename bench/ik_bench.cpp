@@ -8,7 +8,7 @@
 #include <tbb/global_control.h>
 
 #include "io/hanim_loader.h"
-#include "systems/fk_reference.h"
+#include "reference/fk_reference.h"
 #include "components/walker.h"
 #include "systems/ik.h"
 

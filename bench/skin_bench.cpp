@@ -12,9 +12,9 @@
 #include "io/hanim_loader.h"
 #include "rig/body_rig.h"
 #include "rig/muscle_binding.h"
-#include "systems/frame_script.h"
+#include "scene/crowd_scene.h"
 #include "systems/skin_kernel.h"
-#include "systems/skin_reference.h"
+#include "reference/skin_reference.h"
 
 namespace {
 

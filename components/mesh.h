@@ -61,9 +61,5 @@ using CotangentEdges = std::vector<std::vector<std::pair<std::uint32_t, double>>
 CotangentEdges cotangent_edges(const Mesh& mesh, std::span<const std::uint8_t> rows = {},
                                std::vector<double>* vertex_areas = nullptr);
 
-// Checks a mesh a loader produced and throws LoadError "SOURCE: <what>: reason" naming the first problem:
-// index out of range, non-finite coordinate, per-vertex arrays of the wrong length, empty mesh, part index out of
-// range. `source` names the file (and group) for the message.
-void validate_mesh(const Mesh& mesh, std::string_view source);
 
 }  // namespace strata

@@ -19,6 +19,7 @@ add_library(strata_fuzz_loaders STATIC
   io/xml_util.cpp
   io/bvh.cpp
   io/obj.cpp
+  io/mesh_check.cpp
   io/makehuman.cpp
   io/gltf.cpp
   rig/binding.cpp

@@ -21,6 +21,8 @@
 // TINYGLTF_IMPLEMENTATION here would compile a second copy of the library into ours).
 #include <tiny_gltf.h>
 
+#include "io/mesh_check.h"
+
 namespace strata {
 namespace {
 

@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/mesh_check.h"
 #include "io/hanim_loader.h"
 
 namespace strata {

@@ -9,6 +9,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "io/mesh_check.h"
+
 namespace strata {
 namespace {
 

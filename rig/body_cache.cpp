@@ -1,5 +1,6 @@
 #include "rig/body_cache.h"
 
+#include "io/mesh_check.h"
 #include "io/atomic_file.h"
 
 #include <cstdlib>

@@ -10,7 +10,7 @@
 #include "components/body.h"
 #include "components/skeleton.h"
 #include "profiling/profiler.h"
-#include "systems/frame_script.h"
+#include "scene/crowd_scene.h"
 
 namespace strata {
 

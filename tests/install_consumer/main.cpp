@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include <strata/io/hanim_loader.h>
-#include <strata/systems/frame_script.h>
+#include <strata/scene/crowd_scene.h>
 
 int main() {
   strata::CrowdScene scene(strata::to_rig(strata::load_default_humanoid()));

@@ -1,0 +1,45 @@
+#include "reference/skin_walk.h"
+
+#include <algorithm>
+#include <memory>
+#include <stdexcept>
+
+#include "reference/skin_metrics.h"
+#include "scene/crowd_scene.h"
+#include "reference/skin_reference.h"
+
+namespace strata {
+
+WalkSkinMetrics measure_walk_skin(const Rig& rig_template, const BodyLevel& level, float seconds, float fps) {
+  Rig rig = rig_template;
+  auto body = std::make_shared<Body>();
+  body->levels.push_back(level);
+  rig.body = body;
+  CrowdScene scene(rig);
+  if (!scene.walk_unavailable().empty())
+    throw std::invalid_argument("measure_walk_skin: " + scene.walk_unavailable());
+  CrowdConfig config;
+  config.walkers = 1;
+  config.motion = MotionSource::Walk;
+  scene.spawn_crowd(config);
+  scene.set_body_level(-1);  // skinned here in humanoid space, against the rest mesh
+  Profiler profiler(8, false);
+  WalkSkinMetrics out;
+  const auto frames = static_cast<int>(seconds * fps);
+  for (int f = 0; f < frames; ++f) {
+    scene.simulate(1.0f / fps, profiler);
+    const std::vector<glm::mat4> skinning = walker_skinning_matrices(scene.lanes(), 0);
+    const SkinnedVertices posed = skin_reference(level.mesh, level.binding, skinning);
+    const SkinMetrics m = measure_skin(level.mesh, level.binding, skinning, posed.positions);
+    if (m.inverted_triangles > out.inverted_triangles) {
+      out.inverted_triangles = m.inverted_triangles;
+      out.worst_frame = f;
+    }
+    out.seam_gap_max_m = std::max(out.seam_gap_max_m, m.seam_gap_max_m);
+    out.nan_count += m.nan_count;
+    ++out.frames;
+  }
+  return out;
+}
+
+}  // namespace strata

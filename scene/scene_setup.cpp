@@ -1,0 +1,152 @@
+#include "scene/scene_setup.h"
+
+#include <tbb/info.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "io/bvh.h"
+#include "io/hanim_loader.h"
+#include "motion/retarget.h"
+#include "io/gltf.h"
+#include "io/makehuman.h"
+#include "io/load_error.h"
+#include "io/muscle_file.h"
+#include "rig/binding.h"
+#include "rig/body_generator.h"
+#include "rig/body_rig.h"
+#include "rig/muscle_binding.h"
+#include "rig/skin_from_skeleton.h"
+#include "systems/animation_sample.h"
+
+namespace strata {
+
+namespace {
+
+// The muscle layer --muscles asks for, bound to the rig's body.
+void attach_muscles(Rig& rig, const SceneOptions& o, bool default_rig) {
+  if (o.muscles == "none" || !rig.body) return;
+  if (o.muscles == "default" && default_rig) {
+    rig.muscles = default_muscle_rig();
+    return;
+  }
+  try {
+    MuscleSet set = o.muscles == "default" ? default_muscles(rig.skeleton) : load_muscle_file(o.muscles, rig.skeleton);
+    rig.muscles = bind_muscle_rig(std::move(set), *rig.body);
+  } catch (const LoadError& e) {
+    // The shipped muscles name the shipped skeleton's joints; a foreign rig without them just has no muscles.
+    if (o.muscles != "default") throw;
+    std::fprintf(stderr, "note: no muscle layer for this rig (%s)\n", e.what());
+  }
+}
+
+}  // namespace
+
+int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
+  if (rest || rig.clips.empty()) {
+    if (!rest && !clip.empty() && clip != "all")
+      throw std::invalid_argument("no clip '" + clip + "' in " + rig.skeleton.source + " (it has no animation)");
+    return kRestPose;
+  }
+  if (clip.empty() || clip == "all") return kAllClips;
+  for (std::size_t i = 0; i < rig.clips.size(); ++i)
+    if (rig.clips[i].name == clip) return static_cast<int>(i);
+  int index = -1;
+  auto [end, ec] = std::from_chars(clip.data(), clip.data() + clip.size(), index);
+  if (ec == std::errc() && end == clip.data() + clip.size() && index >= 0 &&
+      static_cast<std::size_t>(index) < rig.clips.size())
+    return index;
+  std::string available;
+  for (const AnimationClip& c : rig.clips) available += (available.empty() ? "" : ", ") + c.name;
+  throw std::invalid_argument("no clip '" + clip + "' in " + rig.skeleton.source + " (available: " + available +
+                              ", all)");
+}
+
+Rig load_mesh_rig(const std::string& path) {
+  namespace fs = std::filesystem;
+  const std::string ext = fs::path(path).extension().string();
+  Rig rig;
+  if (ext == ".glb" || ext == ".gltf" || fs::is_directory(path)) {
+    ImportedBody imported = ext == ".glb" || ext == ".gltf" ? load_gltf(path) : load_makehuman(path);
+    rig.name = imported.mesh.name.empty() ? fs::path(path).stem().string() : imported.mesh.name;
+    rig.skeleton = std::move(imported.skeleton);
+    rig.clips = std::move(imported.clips);
+    rig.body = std::make_shared<const Body>(Body{{BodyLevel{std::move(imported.mesh), std::move(imported.skin)}}});
+  } else {
+    rig = to_rig(load_humanoid_file(path));
+    std::optional<BodyLevel> skin = skin_from_skeleton(rig.skeleton);
+    if (!skin) throw std::invalid_argument(path + ": the file has no skin with weights (use --skeleton for bones)");
+    rig.body = std::make_shared<const Body>(Body{{std::move(*skin)}});
+  }
+  return rig;
+}
+
+std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
+  if (!o.binding_overrides.empty() && (!o.mesh.empty() || !o.skeleton.empty()))
+    throw std::invalid_argument("--binding-overrides rebinds the shipped body; it cannot go with --mesh or --skeleton");
+  Rig rig;
+  if (!o.mesh.empty()) {
+    rig = load_mesh_rig(o.mesh);
+  } else {
+    rig = to_rig(o.skeleton.empty() ? load_default_humanoid() : load_humanoid_file(o.skeleton));
+    // The shipped skeleton comes with the shipped body; an X3D skeleton with a skin brings its own.
+    // Loaded even without a body to draw, so a bad file fails the same way at every --level.
+    const std::optional<BindingTables> tables =
+        o.binding_overrides.empty()
+            ? std::nullopt
+            : std::optional(load_binding_overrides_file(o.binding_overrides, default_binding_tables()));
+    if (o.level >= 0) {
+      if (tables) {
+        rig.body = bind_body(default_body().levels, rig.skeleton, BindingMethod::ThreeStep, &default_body().cage,
+                             &*tables);
+      } else if (o.skeleton.empty()) {
+        rig.body = default_bound_body();
+      } else if (std::optional<BodyLevel> skin = skin_from_skeleton(rig.skeleton)) {
+        rig.body = std::make_shared<const Body>(Body{{std::move(*skin)}});
+      }
+    }
+  }
+  attach_muscles(rig, o, o.mesh.empty() && o.skeleton.empty());
+  CrowdConfig config;
+  config.walkers = o.walkers;
+  config.seed = o.seed;
+  config.spacing = o.spacing;
+  config.clip = resolve_clip(rig, o.clip, o.rest);
+  auto scene = std::make_unique<CrowdScene>(std::move(rig));
+  if (o.motion == "walk" || o.motion.empty()) {
+    const bool implicit = o.motion.empty();
+    if (implicit && (!o.clip.empty() || o.rest || !scene->walk_unavailable().empty())) {
+      config.motion = MotionSource::Clip;
+    } else {
+      if (!scene->walk_unavailable().empty()) throw std::invalid_argument(scene->walk_unavailable());
+      config.motion = MotionSource::Walk;
+    }
+  } else if (o.motion == "clip") {
+    config.motion = MotionSource::Clip;
+  } else if (o.motion.size() > 4 && o.motion.compare(o.motion.size() - 4, 4, ".bvh") == 0) {
+    // Motion capture: retargeted onto this skeleton by the Poser -> H-Anim map, feet locked by IK in stance.
+    scene->set_mocap(retarget_bvh(load_bvh_file(o.motion), scene->rig().skeleton));
+    config.motion = MotionSource::Mocap;
+  } else {
+    throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");
+  }
+  scene->spawn_crowd(config);
+  scene->set_body_level(o.level);
+  if (is_subdiv_level(o.level) && scene->body_level() != o.level)
+    throw std::invalid_argument("--level " + body_level_name(o.level) +
+                                " needs a subdivision cage; only the shipped body has one");
+  if (scene->has_muscles()) {
+    MuscleGains gains = o.muscle_overrides.empty() ? MuscleGains{}
+                                                   : load_muscle_overrides(o.muscle_overrides, scene->rig().muscles->set);
+    gains.global *= o.muscle_gain;
+    scene->set_muscle_gains(std::move(gains));
+  }
+  return scene;
+}
+
+int thread_count(const SceneOptions& o) { return o.threads > 0 ? o.threads : tbb::info::default_concurrency(); }
+
+}  // namespace strata

@@ -1,0 +1,140 @@
+// Keyframe sampling (X3D interpolator semantics) and the animation system's clock.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "systems/animation_sample.h"
+#include "scene/crowd_scene.h"
+
+namespace strata {
+namespace {
+
+float angle_about_x(const glm::quat& q) { return 2.0f * std::atan2(q.x, q.w); }
+
+AnimationClip swing_clip() {
+  AnimationClip clip;
+  clip.name = "swing";
+  clip.duration = 2.0f;
+  RotationTrack r;
+  r.joint = 1;
+  r.times = {0.0f, 1.0f, 2.0f};
+  r.values = {glm::angleAxis(0.0f, glm::vec3(1, 0, 0)), glm::angleAxis(0.8f, glm::vec3(1, 0, 0)),
+              glm::angleAxis(0.0f, glm::vec3(1, 0, 0))};
+  clip.rotations.push_back(r);
+  TranslationTrack t;
+  t.joint = 0;
+  t.times = {0.0f, 2.0f};
+  t.values = {glm::vec3(0.0f), glm::vec3(0.0f, -0.1f, 0.0f)};
+  clip.translations.push_back(t);
+  return clip;
+}
+
+TEST(SampleClip, InterpolatesRotationAndTranslation) {
+  AnimationClip clip = swing_clip();
+  std::vector<glm::quat> rot(3);
+  glm::vec3 root;
+  sample_clip(clip, 0.5f, rot, root);
+  EXPECT_NEAR(angle_about_x(rot[1]), 0.4f, 1e-6f) << "slerp about a fixed axis is linear in angle";
+  EXPECT_NEAR(root.y, -0.025f, 1e-7f);
+  EXPECT_EQ(rot[0], glm::quat(1, 0, 0, 0)) << "joints without a track stay at identity";
+  EXPECT_EQ(rot[2], glm::quat(1, 0, 0, 0));
+  sample_clip(clip, 1.0f, rot, root);
+  EXPECT_NEAR(angle_about_x(rot[1]), 0.8f, 1e-6f) << "exactly on a key";
+}
+
+TEST(SampleClip, LoopsWrapAndOneShotsClamp) {
+  AnimationClip clip = swing_clip();
+  std::vector<glm::quat> a(2), b(2);
+  glm::vec3 ra, rb;
+  sample_clip(clip, 0.3f, a, ra);
+  sample_clip(clip, 4.3f, b, rb);
+  EXPECT_NEAR(angle_about_x(a[1]), angle_about_x(b[1]), 1e-5f);
+  sample_clip(clip, -1.7f, b, rb);
+  EXPECT_NEAR(angle_about_x(a[1]), angle_about_x(b[1]), 1e-5f) << "negative times wrap too";
+  clip.loop = false;
+  sample_clip(clip, 5.0f, b, rb);
+  EXPECT_NEAR(rb.y, -0.1f, 1e-7f) << "a one-shot clip holds its last key";
+  sample_clip(clip, std::nanf(""), b, rb);
+  EXPECT_TRUE(std::isfinite(rb.y)) << "a NaN time never reaches the pose";
+}
+
+TEST(SampleClip, TakesTheShorterArcBetweenAntipodalKeys) {
+  AnimationClip clip;
+  clip.duration = 1.0f;
+  RotationTrack r;
+  r.joint = 0;
+  r.times = {0.0f, 1.0f};
+  glm::quat q = glm::angleAxis(0.2f, glm::vec3(0, 1, 0));
+  r.values = {q, -q};  // the same rotation, written with opposite sign
+  clip.rotations.push_back(r);
+  std::vector<glm::quat> rot(1);
+  glm::vec3 root;
+  sample_clip(clip, 0.5f, rot, root);
+  EXPECT_NEAR(std::abs(glm::dot(rot[0], q)), 1.0f, 1e-6f);
+}
+
+TEST(AnimationSystem, AdvancesEachWalkerByItsRate) {
+  Rig rig;
+  rig.skeleton.joint_names = {"HumanoidRoot", "l_hip", "l_knee"};
+  rig.skeleton.source_joint_names = rig.skeleton.joint_names;
+  rig.skeleton.parents = {-1, 0, 1};
+  rig.skeleton.centers = {{0, 1, 0}, {0.1f, 0.9f, 0}, {0.1f, 0.5f, 0}};
+  rig.skeleton.limits.resize(3);
+  rig.skeleton.stiffness.assign(3, glm::vec3(1.0f));
+  rig.clips.push_back(swing_clip());
+  CrowdScene scene(rig);
+  scene.spawn({0, 0, 0}, 0.0f, 0.0f, 1.0f, 0);
+  scene.spawn({1, 0, 0}, 0.0f, 0.0f, 0.5f, 0);
+  scene.spawn({2, 0, 0}, 0.0f, 0.0f, 1.0f, -1);
+  Profiler profiler;
+  for (int f = 0; f < 15; ++f) scene.simulate(0.1f, profiler);  // 1.5 s
+  WalkerLanes lanes = scene.lanes();
+  auto joint1_angle = [&](std::size_t w) {
+    glm::quat q(lanes.local_rotation[(1 * 4 + 3) * lanes.stride + w], lanes.local_rotation[(1 * 4 + 0) * lanes.stride + w],
+                lanes.local_rotation[(1 * 4 + 1) * lanes.stride + w], lanes.local_rotation[(1 * 4 + 2) * lanes.stride + w]);
+    return angle_about_x(q);
+  };
+  EXPECT_NEAR(joint1_angle(0), 0.4f, 1e-4f) << "t = 1.5 s: halfway back down";
+  EXPECT_NEAR(joint1_angle(1), 0.6f, 1e-4f) << "half rate: t = 0.75 s";
+  EXPECT_NEAR(joint1_angle(2), 0.0f, 1e-7f) << "clip -1 holds the rest pose";
+  EXPECT_NEAR(lanes.root_translation[1 * lanes.stride + 0], -0.075f, 1e-5f);
+  EXPECT_EQ(lanes.root_translation[1 * lanes.stride + 2], 0.0f);
+}
+
+TEST(AnimationSystem, AllClipsLayerEachOnItsOwnCycle) {
+  Rig rig;
+  rig.skeleton.joint_names = {"HumanoidRoot", "a", "b"};
+  rig.skeleton.source_joint_names = rig.skeleton.joint_names;
+  rig.skeleton.parents = {-1, 0, 0};
+  rig.skeleton.centers = {{0, 1, 0}, {0.1f, 0.9f, 0}, {-0.1f, 0.9f, 0}};
+  rig.skeleton.limits.resize(3);
+  rig.skeleton.stiffness.assign(3, glm::vec3(1.0f));
+  rig.clips.push_back(swing_clip());  // drives joint 1, 2 s cycle
+  AnimationClip other;
+  other.name = "other";
+  other.duration = 0.5f;
+  RotationTrack r;
+  r.joint = 2;
+  r.times = {0.0f, 0.5f};
+  r.values = {glm::angleAxis(0.0f, glm::vec3(1, 0, 0)), glm::angleAxis(1.0f, glm::vec3(1, 0, 0))};
+  other.rotations.push_back(r);
+  rig.clips.push_back(other);
+  CrowdScene scene(rig);
+  scene.spawn({0, 0, 0}, 0.0f, 0.0f, 1.0f, kAllClips);
+  Profiler profiler;
+  for (int f = 0; f < 7; ++f) scene.simulate(0.1f, profiler);  // 0.7 s: clip 0 at 0.7 s, clip 1 at 0.2 s
+  WalkerLanes lanes = scene.lanes();
+  auto angle = [&](std::size_t j) {
+    glm::quat q(lanes.local_rotation[(j * 4 + 3) * lanes.stride], lanes.local_rotation[(j * 4 + 0) * lanes.stride],
+                lanes.local_rotation[(j * 4 + 1) * lanes.stride], lanes.local_rotation[(j * 4 + 2) * lanes.stride]);
+    return angle_about_x(q);
+  };
+  EXPECT_NEAR(angle(1), 0.56f, 1e-4f);
+  EXPECT_NEAR(angle(2), 0.4f, 1e-4f);
+  EXPECT_NEAR(lanes.root_translation[lanes.stride], -0.035f, 1e-5f);
+}
+
+}  // namespace
+}  // namespace strata

@@ -1,0 +1,417 @@
+// The subdivided cage (rig/subdiv_topology.h, systems/subdiv.h): the per-frame path against OpenSubdiv's own
+// refinement, watertightness, no NaN on extreme poses, run-time level switching, open boundaries and
+// face-varying UVs.
+#include <gtest/gtest.h>
+
+#include "tests/apps/strata_cli_runner.h"
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <utility>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/stencilTable.h>
+#include <opensubdiv/far/stencilTableFactory.h>
+#include <tbb/global_control.h>
+
+#include "io/hanim_loader.h"
+#include "rig/body_rig.h"
+#include "rig/subdiv_refiner.h"
+#include "rig/subdiv_topology.h"
+#include "systems/animation_sample.h"
+#include "systems/fk.h"
+#include "scene/crowd_scene.h"
+#include "systems/subdiv.h"
+
+namespace strata {
+namespace {
+
+namespace Far = OpenSubdiv::Far;
+
+struct Point3 {
+  float x = 0, y = 0, z = 0;
+  void Clear() { x = y = z = 0.0f; }
+  void AddWithWeight(const Point3& s, float w) {
+    x += w * s.x;
+    y += w * s.y;
+    z += w * s.z;
+  }
+};
+
+Rig default_rig() {
+  Rig rig = to_rig(load_default_humanoid());
+  rig.body = default_bound_body();
+  return rig;
+}
+
+// One walker at the origin facing +Z in the rest pose, after one frame at `level`.
+std::unique_ptr<CrowdScene> rest_scene(const Rig& rig, int level) {
+  auto scene = std::make_unique<CrowdScene>(rig);
+  CrowdConfig config;
+  config.motion = MotionSource::Clip;
+  config.clip = kRestPose;
+  config.walkers = 1;
+  config.heading_jitter = 0.0f;
+  scene->spawn_crowd(config);
+  scene->set_body_level(level);
+  Profiler profiler(4, false);
+  scene->simulate(1.0f / 30.0f, profiler);
+  return scene;
+}
+
+// Every directed edge once and its reverse once: closed, 2-manifold along edges, consistently oriented.
+void expect_watertight(const std::vector<std::uint32_t>& triangles, const char* what) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+    for (int k = 0; k < 3; ++k) ++directed[{triangles[t + k], triangles[t + (k + 1) % 3]}];
+  std::size_t bad = 0;
+  for (const auto& [edge, count] : directed) {
+    const auto reverse = directed.find({edge.second, edge.first});
+    if (count != 1 || reverse == directed.end() || reverse->second != 1) ++bad;
+  }
+  EXPECT_EQ(bad, 0u) << what << ": directed edges not matched by exactly one reverse edge";
+}
+
+TEST(Subdiv, DefaultBodyCarriesABoundCage) {
+  const auto body = default_bound_body();
+  ASSERT_EQ(body->levels.size(), 3u) << "the cage is not one of the levels";
+  ASSERT_TRUE(body->cage.has_value());
+  EXPECT_EQ(body->cage->binding.vertex_count(), body->cage->mesh.vertex_count());
+  EXPECT_GT(body->cage->mesh.vertex_count(), 1000u);
+  for (std::size_t v = 0; v < body->cage->binding.vertex_count(); ++v) ASSERT_GE(body->cage->binding.influence_count(v), 1);
+  // Built once per rig: a second request is the same object.
+  EXPECT_EQ(body_subdiv_surface(*body, 2).get(), body_subdiv_surface(*body, 2).get());
+}
+
+// The per-frame path (cage skinned at rest, level-by-level stencils from layout order, output order) against
+// OpenSubdiv refining the rest cage level by level with PrimvarRefiner::Interpolate, and against its factorised
+// stencil table.
+TEST(Subdiv, RestCageMatchesOpenSubdivRefinement) {
+  const Rig rig = default_rig();
+  const Mesh& cage = rig.body->cage->mesh;
+  for (int depth = 1; depth <= kMaxSubdivDepth; ++depth) {
+    const auto scene = rest_scene(rig, subdiv_level(depth));
+    ASSERT_NE(scene->subdiv(), nullptr);
+    const SkinnedCrowd& out = scene->skinned();
+
+    std::unique_ptr<Far::TopologyRefiner> refiner = make_cage_refiner(cage);
+    refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(depth));
+    const Far::PrimvarRefiner primvar(*refiner);
+    std::vector<Point3> level(cage.vertex_count());
+    for (std::size_t i = 0; i < level.size(); ++i) level[i] = {cage.positions[i].x, cage.positions[i].y, cage.positions[i].z};
+    for (int l = 1; l <= depth; ++l) {
+      std::vector<Point3> next(static_cast<std::size_t>(refiner->GetLevel(l).GetNumVertices()));
+      primvar.Interpolate(l, level, next);
+      level = std::move(next);
+    }
+    Far::StencilTableFactoryReal<float>::Options options;
+    options.generateIntermediateLevels = false;
+    std::unique_ptr<const Far::StencilTableReal<float>> table(Far::StencilTableFactoryReal<float>::Create(*refiner, options));
+    std::vector<Point3> cage_points(cage.vertex_count()), factorised(static_cast<std::size_t>(table->GetNumStencils()));
+    for (std::size_t i = 0; i < cage.vertex_count(); ++i)
+      cage_points[i] = {cage.positions[i].x, cage.positions[i].y, cage.positions[i].z};
+    table->UpdateValues(cage_points.data(), factorised.data());
+
+    ASSERT_EQ(out.vertex_count, level.size());
+    ASSERT_EQ(factorised.size(), level.size());
+    float worst = 0.0f, worst_factorised = 0.0f;
+    const std::vector<std::uint32_t>& osd = scene->subdiv()->opensubdiv_vertex;
+    ASSERT_EQ(osd.size(), level.size());
+    for (std::size_t i = 0; i < level.size(); ++i) {
+      const glm::vec3 p = out.position(0, i);
+      const Point3& a = level[osd[i]];
+      const Point3& b = factorised[osd[i]];
+      worst = std::max(worst, glm::length(p - glm::vec3(a.x, a.y, a.z)));
+      worst_factorised = std::max(worst_factorised, glm::length(p - glm::vec3(b.x, b.y, b.z)));
+    }
+    // The renumbered triangles are OpenSubdiv's faces, in its face order.
+    const Far::TopologyLevel& last = refiner->GetLevel(depth);
+    ASSERT_EQ(scene->subdiv()->triangles.size(), 3u * static_cast<std::size_t>(last.GetNumFaces()));
+    for (int f = 0; f < last.GetNumFaces(); ++f)
+      for (int k = 0; k < 3; ++k)
+        ASSERT_EQ(osd[scene->subdiv()->triangles[3 * static_cast<std::size_t>(f) + k]],
+                  static_cast<std::uint32_t>(last.GetFaceVertices(f)[k]));
+    EXPECT_LT(worst, 1e-5f) << "S" << depth;
+    EXPECT_LT(worst_factorised, 1e-5f) << "S" << depth;
+
+    // Normals: the area-weighted average compute_normals (an independent implementation) gives on the same mesh.
+    Mesh refined;
+    refined.triangles = scene->subdiv()->triangles;
+    for (std::size_t i = 0; i < out.vertex_count; ++i) refined.positions.push_back(out.position(0, i));
+    compute_normals(refined);
+    float normal_gap = 0.0f;
+    for (std::size_t i = 0; i < out.vertex_count; ++i)
+      normal_gap = std::max(normal_gap, glm::length(out.normal(0, i) - refined.normals[i]));
+    EXPECT_LT(normal_gap, 1e-4f) << "S" << depth;
+  }
+}
+
+TEST(Subdiv, RefinedCageStaysWatertight) {
+  const auto body = default_bound_body();
+  expect_watertight(body->cage->mesh.triangles, "cage");
+  for (int depth = 1; depth <= kMaxSubdivDepth; ++depth) {
+    const auto surface = body_subdiv_surface(*body, depth);
+    ASSERT_EQ(surface->triangle_count(), body->cage->mesh.triangle_count() << (2 * depth)) << "Loop: 4 per level";
+    expect_watertight(surface->triangles, ("S" + std::to_string(depth)).c_str());
+    // Same topology as the cage: V - E + F = 2 (closed, sphere-like), E = 3F / 2.
+    const auto v = static_cast<long>(surface->vertex_count), f = static_cast<long>(surface->triangle_count());
+    EXPECT_EQ(v - 3 * f / 2 + f, 2) << "S" << depth;
+    for (std::uint32_t i : surface->triangles) ASSERT_LT(i, surface->vertex_count);
+  }
+}
+
+// Random large joint rotations, limbs collapsed to a point, a walker scaled to nothing: every output finite,
+// every normal unit length.
+TEST(Subdiv, NoNanOnExtremePoses) {
+  const Rig rig = default_rig();
+  CrowdScene scene(rig);
+  CrowdConfig config;
+  config.motion = MotionSource::Clip;
+  config.clip = kRestPose;
+  config.walkers = 6;
+  scene.spawn_crowd(config);
+  scene.set_body_level(subdiv_level(2));
+  Profiler profiler(4, false);
+  scene.simulate(0.1f, profiler);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<float> wild(0.0f, 3.0f);
+  WalkerLanes lanes = scene.lanes();
+  for (std::size_t w = 0; w < lanes.count; ++w)
+    for (std::uint32_t j = 0; j < lanes.joints; ++j) {
+      const glm::quat q = glm::normalize(glm::quat(wild(rng), wild(rng), wild(rng), wild(rng)));
+      const float xyzw[4] = {q.x, q.y, q.z, q.w};
+      for (int c = 0; c < 4; ++c) lanes.local_rotation[(j * 4 + c) * lanes.stride + w] = xyzw[c];
+    }
+  fk_system(rig.skeleton, lanes);
+  // Walkers 1-2: arms and legs collapsed (zero skinning matrices); walker 3: placement scale 0 (everything at
+  // one point, every triangle degenerate).
+  for (const char* name : {"l_elbow", "r_elbow", "l_knee", "r_knee", "l_shoulder"}) {
+    const int j = rig.skeleton.find_joint(name);
+    ASSERT_GE(j, 0) << name;
+    for (std::size_t w : {1, 2})
+      for (std::uint32_t c = 0; c < kAffineFloats; ++c) lanes.skinning[(j * kAffineFloats + c) * lanes.stride + w] = 0.0f;
+  }
+  scene.walkers().f32(kWalkerPlacement, 4)[3] = 0.0f;
+  SkinnedCrowd out;
+  subdiv_system(*scene.subdiv(), lanes, out);
+  std::size_t bad = 0, plus_y = 0;
+  for (std::size_t w = 0; w < out.walkers; ++w)
+    for (std::size_t v = 0; v < out.vertex_count; ++v) {
+      const glm::vec3 p = out.position(w, v), n = out.normal(w, v);
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !(std::abs(glm::length(n) - 1.0f) < 1e-3f))
+        ++bad;
+      plus_y += w == 3 && n == glm::vec3(0, 1, 0);
+    }
+  EXPECT_EQ(bad, 0u);
+  EXPECT_EQ(plus_y, out.vertex_count) << "a fully collapsed walker falls back to +Y normals";
+}
+
+TEST(Subdiv, LevelSwitchingAtRunTimeChangesWhatIsDrawn) {
+  const Rig rig = default_rig();
+  CrowdScene scene(rig);
+  CrowdConfig config;
+  config.walkers = 3;
+  config.motion = MotionSource::Walk;
+  scene.spawn_crowd(config);
+  Profiler profiler(4, false);
+  const std::size_t cage_triangles = rig.body->cage->mesh.triangle_count();
+  const int order[] = {0, subdiv_level(2), 1, subdiv_level(1), subdiv_level(3), 2, subdiv_level(2), -1};
+  for (int level : order) {
+    scene.set_body_level(level);
+    scene.simulate(1.0f / 30.0f, profiler);
+    EXPECT_EQ(scene.body_level(), level);
+    if (level < 0) {
+      EXPECT_EQ(scene.skinned().vertex_count, 0u);
+      continue;
+    }
+    const std::size_t expected = is_subdiv_level(level) ? cage_triangles << (2 * subdiv_depth(level))
+                                                        : rig.body->levels[static_cast<std::size_t>(level)].mesh.triangle_count();
+    EXPECT_EQ(scene.body_triangles().size(), 3 * expected) << body_level_name(level);
+    const std::size_t vertices = is_subdiv_level(level) ? scene.subdiv()->vertex_count
+                                                        : rig.body->levels[static_cast<std::size_t>(level)].mesh.vertex_count();
+    EXPECT_EQ(scene.skinned().vertex_count, vertices) << body_level_name(level);
+    EXPECT_EQ(scene.skinned().walkers, 3u);
+  }
+  // A body without a cage draws level 0 when asked for S levels.
+  Rig plain = rig;
+  plain.body = std::make_shared<const Body>(Body{rig.body->levels});
+  CrowdScene no_cage(plain);
+  no_cage.set_body_level(subdiv_level(2));
+  EXPECT_EQ(no_cage.body_level(), 0);
+  EXPECT_EQ(no_cage.subdiv(), nullptr);
+}
+
+TEST(Subdiv, AnyThreadCountGivesTheSameBytes) {
+  const Rig rig = default_rig();
+  CrowdScene scene(rig);
+  CrowdConfig config;
+  config.walkers = 7;
+  config.motion = MotionSource::Walk;
+  scene.spawn_crowd(config);
+  scene.set_body_level(subdiv_level(1));
+  Profiler profiler(4, false);
+  scene.simulate(0.2f, profiler);
+  SkinnedCrowd one, many;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    subdiv_system(*scene.subdiv(), scene.lanes(), one);
+  }
+  subdiv_system(*scene.subdiv(), scene.lanes(), many);
+  ASSERT_EQ(one.px.size(), many.px.size());
+  EXPECT_EQ(std::memcmp(one.px.data(), many.px.data(), one.px.size() * 4), 0);
+  EXPECT_EQ(std::memcmp(one.nz.data(), many.nz.data(), one.nz.size() * 4), 0);
+}
+
+// An open, flat, UV-mapped patch (u = x, v = y): the boundary must not shrink (corners fixed, boundary points on
+// the boundary lines), and the face-varying UVs, refined once, must follow the refined positions.
+TEST(Subdiv, OpenBoundaryKeepsItsEdgeAndUvsAreRefinedOnce) {
+  constexpr int kN = 5;  // vertices per side
+  BodyLevel patch;
+  patch.mesh.name = "patch";
+  for (int y = 0; y < kN; ++y)
+    for (int x = 0; x < kN; ++x) {
+      const glm::vec2 uv{x / float(kN - 1), y / float(kN - 1)};
+      patch.mesh.positions.emplace_back(uv.x, uv.y, 0.0f);
+      patch.mesh.uvs.push_back(uv);
+      patch.mesh.part.push_back(0);
+    }
+  patch.mesh.part_names = {"hip"};
+  for (int y = 0; y + 1 < kN; ++y)
+    for (int x = 0; x + 1 < kN; ++x) {
+      // Diagonals alternate so each patch corner has one triangle: EDGE_AND_CORNER keeps only such a vertex
+      // fixed (a boundary vertex with two faces is smoothed along the boundary like any other).
+      const std::uint32_t a = y * kN + x, b = a + 1, c = a + kN, d = c + 1;
+      if ((x + y) % 2 == 0)
+        for (std::uint32_t i : {a, b, c, b, d, c}) patch.mesh.triangles.push_back(i);
+      else
+        for (std::uint32_t i : {a, b, d, a, d, c}) patch.mesh.triangles.push_back(i);
+    }
+  compute_normals(patch.mesh);
+  patch.binding.joints.assign(patch.mesh.vertex_count(), {0, 0, 0, 0});
+  patch.binding.weights.assign(patch.mesh.vertex_count(), {1.0f, 0.0f, 0.0f, 0.0f});
+
+  for (int depth = 1; depth <= kMaxSubdivDepth; ++depth) {
+    const SubdivSurface s = make_subdiv_surface(patch, depth);
+    ASSERT_EQ(s.uv_triangles.size(), s.triangles.size());
+    ASSERT_FALSE(s.uvs.empty());
+    // Positions, refined as the cage's are (identity skinning through the per-frame stencils).
+    std::vector<float> x(patch.mesh.vertex_count()), y(x.size()), z(x.size());
+    for (std::uint32_t i = 0; i < x.size(); ++i) {
+      const std::uint32_t v = s.cage_layout.original[i];
+      x[i] = patch.mesh.positions[v].x, y[i] = patch.mesh.positions[v].y, z[i] = patch.mesh.positions[v].z;
+    }
+    for (const SubdivStencils& step : s.steps) {
+      std::vector<float> nx(step.rows()), ny(step.rows()), nz(step.rows());
+      apply_subdiv_stencils(step, x.data(), y.data(), z.data(), nx.data(), ny.data(), nz.data());
+      x = std::move(nx), y = std::move(ny), z = std::move(nz);
+    }
+    glm::vec2 lo(1e9f), hi(-1e9f);
+    std::size_t on_boundary = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      lo = glm::min(lo, glm::vec2(x[i], y[i]));
+      hi = glm::max(hi, glm::vec2(x[i], y[i]));
+      EXPECT_NEAR(z[i], 0.0f, 1e-6f);
+      on_boundary += std::min({std::abs(x[i]), std::abs(y[i]), std::abs(1 - x[i]), std::abs(1 - y[i])}) < 1e-6f;
+    }
+    EXPECT_NEAR(lo.x, 0.0f, 1e-6f) << "the boundary did not shrink";
+    EXPECT_NEAR(lo.y, 0.0f, 1e-6f);
+    EXPECT_NEAR(hi.x, 1.0f, 1e-6f);
+    EXPECT_NEAR(hi.y, 1.0f, 1e-6f);
+    EXPECT_EQ(on_boundary, static_cast<std::size_t>(4 * (kN - 1) << depth)) << "every boundary point on the boundary";
+    for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+      const glm::vec2 uv = s.uvs[s.uv_triangles[t]];
+      const std::uint32_t v = s.triangles[t];
+      ASSERT_NEAR(uv.x, x[v], 1e-5f) << "corner " << t;
+      ASSERT_NEAR(uv.y, y[v], 1e-5f) << "corner " << t;
+    }
+  }
+}
+
+TEST(Subdiv, RejectsBadInput) {
+  const auto body = default_bound_body();
+  EXPECT_THROW(make_subdiv_surface(*body->cage, 0), std::invalid_argument);
+  EXPECT_THROW(make_subdiv_surface(*body->cage, 4), std::invalid_argument);
+  BodyLevel unbound{body->cage->mesh, {}};
+  EXPECT_THROW(make_subdiv_surface(unbound, 1), std::invalid_argument);
+  EXPECT_THROW(make_subdiv_surface(BodyLevel{}, 1), std::invalid_argument);
+}
+
+// ---- The command line: --level S1..S3 in crowd and bench, and `strata report subdiv` ----------------------------
+
+namespace fs = std::filesystem;
+
+using Result = test::CliResult;
+Result run(const std::string& args) { return test::run_strata(args); }
+
+fs::path scratch(const std::string& name) {
+  fs::path p = fs::temp_directory_path() / ("strata_subdiv_test_" + std::to_string(getpid())) / name;
+  fs::remove_all(p);
+  fs::create_directories(p.parent_path());
+  return p;
+}
+
+TEST(SubdivCli, CrowdAndBenchDrawTheRefinedCage) {
+  const auto body = default_bound_body();
+  const fs::path out = scratch("crowd_s2");
+  Result r = run("crowd --walkers 2 --frames 2 --width 96 --height 64 --level S2 --no-progress --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary.at("body_level_name"), "S2");
+  EXPECT_EQ(summary.at("body_vertices"), body_subdiv_surface(*body, 2)->vertex_count);
+  bool timed = false;
+  for (const auto& system : summary.at("systems")) timed |= system.at("name") == "subdiv";
+  EXPECT_TRUE(timed) << summary.at("systems").dump();
+
+  const fs::path json = scratch("bench_s1.json");
+  Result b = run("bench --walkers 3 --frames 2 --level s1 --threads 1 --json " + json.string());
+  ASSERT_EQ(b.status, 0) << b.out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(j.at("level_name"), "S1");
+  EXPECT_EQ(j.at("vertices_per_walker"), body_subdiv_surface(*body, 1)->vertex_count);
+
+  Result bad = run("bench --walkers 1 --frames 1 --level S4");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.out.find("S3"), std::string::npos) << bad.out;
+  const fs::path gltf = fs::path(STRATA_SHARED_DATA) / "gltf_khronos_samples" / "CesiumMan.glb";
+  if (fs::exists(gltf)) {
+    Result no_cage = run("bench --walkers 1 --frames 1 --level S1 --mesh " + gltf.string());
+    EXPECT_NE(no_cage.status, 0);
+    EXPECT_NE(no_cage.out.find("subdivision cage"), std::string::npos) << no_cage.out;
+  }
+}
+
+TEST(SubdivCli, ReportWritesCostsAndDeviation) {
+  const fs::path json = scratch("subdiv.json");
+  Result r = run("report subdiv --batches 1 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  ASSERT_EQ(j.at("levels").size(), 3u);
+  std::size_t previous = 0;
+  for (const auto& level : j.at("levels")) {
+    for (const char* key : {"refine_ns_per_vertex", "factorised_soa_ns_per_vertex", "far_update_values_ns_per_vertex",
+                            "normals_ns_per_vertex", "walker_us"})
+      EXPECT_GT(level.at(key).get<double>(), 0.0) << key;
+    EXPECT_LT(level.at("forms_max_difference_m").get<double>(), 1e-5) << "our stencils and Far's agree";
+    EXPECT_GT(level.at("vertices").get<std::size_t>(), 3 * previous) << "each level about 4x the last";
+    previous = level.at("vertices").get<std::size_t>();
+  }
+  EXPECT_EQ(j.at("routes").size(), 6u) << "levels 0-2 skinned directly, S1-S3 refined";
+  // The refined cage and level 0 are two tessellations of one body: close (cm), but not identical.
+  const double deviation = j.at("max_deviation_m").get<double>();
+  EXPECT_GT(deviation, 0.0);
+  EXPECT_LT(deviation, 0.05);
+  for (const auto& d : j.at("deviation")) EXPECT_LE(d.at("mean_deviation_m").get<double>(), d.at("max_deviation_m").get<double>());
+}
+
+}  // namespace
+}  // namespace strata
