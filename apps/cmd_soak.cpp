@@ -1,6 +1,6 @@
 // strata soak: runs a crowd for a given wall time and samples resident memory from /proc/self/statm, asserting it
 // stays flat after a warm-up. A leak of a few bytes per frame is invisible in a 60-frame run and fatal in a
-// day-long installation; this is the check for it (README, "Reliability").
+// day-long installation; this is the check for it (docs/reliability.md).
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>

@@ -94,7 +94,7 @@ void apply_start_options(const ViewOptions& o, ViewSession& session) {
 }
 
 // The viewer without a window: the same session, scene and panel drawn through EGL into the renderer's output,
-// for pictures of the tool (README) and for checking the panel on machines without a display.
+// for pictures of the tool (docs/commands.md) and for checking the panel on machines without a display.
 int run_view_headless(const ViewOptions& o) {
   try {
     ViewSession session(o.scene);

@@ -1,4 +1,4 @@
-// strata: the engine's command-line front end. See README.md for the commands and their outputs.
+// strata: the engine's command-line front end. See docs/commands.md for the commands and their outputs.
 #include <CLI/CLI.hpp>
 
 #include "apps/commands.h"

@@ -2,7 +2,7 @@
 // Shared by the libFuzzer targets (one per loader, fuzz/fuzz_<loader>.cpp). Each target feeds the bytes to the
 // loader's from-memory entry point and accepts exactly one outcome besides success: a LoadError whose message is
 // one line naming the source. Any other exception escapes and libFuzzer reports it as a crash, which is the point:
-// the bad-input contract (README, "Reliability") allows nothing else.
+// the bad-input contract (docs/reliability.md) allows nothing else.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>

@@ -71,7 +71,7 @@ validate_gltf() {
   node "$ROOT/scripts/validate_gltf.js" "$prefix" "${files[@]}"
 }
 
-# ASan + UBSan over the whole suite (README, "Reliability"). -O1 keeps the build and the tests quick; asserts stay
+# ASan + UBSan over the whole suite (docs/reliability.md). -O1 keeps the build and the tests quick; asserts stay
 # on. Leaks are detected; scripts/lsan.supp silences leaks inside system libraries only (Mesa, EGL, X).
 sanitize() {
   local dir="${ASAN_BUILD_DIR:-$ROOT/build-asan}"

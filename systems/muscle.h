@@ -8,7 +8,7 @@
 //
 // Walkers run in parallel (oneTBB) and each writes only its own lane, so the output is the same for any thread
 // count. Control points are few (60 for the default set), so the loop is per walker, scalar; vectorising across
-// walkers was not worth its complexity at about 1 % of the skinning step's cost (see the README's bench table).
+// walkers was not worth its complexity at about 4 % of the skinning step's cost (0.69 ms against 19.2 ms for 1,000 walkers; docs/skin.md).
 #include "components/muscle.h"
 #include "components/walker.h"
 

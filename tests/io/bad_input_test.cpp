@@ -1,4 +1,4 @@
-// The bad-input contract of every loader (README, "Reliability"): a LoadError whose message is one line naming
+// The bad-input contract of every loader (docs/reliability.md): a LoadError whose message is one line naming
 // the file and the line, element or byte offset at fault; never a crash, a hang, another exception type, or a
 // half-loaded result. The per-format suites (hanim_loader_test, bvh_test, mesh_import_test, binding_test) cover
 // ordinary mistakes; this file holds the cases the issue names and the hostile inputs fuzzing turned up.

@@ -1,4 +1,4 @@
-// Every crash, hang or leak fuzzing found (README, "Reliability") stays fixed: each reproducer lives in
+// Every crash, hang or leak fuzzing found (docs/reliability.md) stays fixed: each reproducer lives in
 // tests/data/fuzz_regressions/<target>/ and goes through the same entry point as its fuzz target (fuzz/). The only
 // acceptable outcomes are a successful load or a one-line LoadError naming the source; the sanitizer build
 // (scripts/strata.sh sanitize) runs this too, so a memory error on a reproducer fails there as well.

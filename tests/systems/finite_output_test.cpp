@@ -1,4 +1,4 @@
-// No NaN ever leaves a system (README, "Reliability"): a property test driving IK and skinning (the vectorised
+// No NaN ever leaves a system (docs/reliability.md): a property test driving IK and skinning (the vectorised
 // kernel and its scalar twin) with 10,000 random extreme goals and poses each: unreachable and degenerate goals,
 // collapsed limbs, huge and tiny scales, non-unit and zero quaternions. Every output must be finite.
 // (The muscle system joins this test when it lands.)
