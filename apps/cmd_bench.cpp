@@ -17,6 +17,7 @@
 #include "render/camera.h"
 #include "render/gl_context.h"
 #include "render/skeleton_renderer.h"
+#include "scene/step.h"
 
 namespace strata::cli {
 namespace {
@@ -33,43 +34,44 @@ struct BenchOptions {
 // The crowd render pass (skinned bodies streamed every frame, one multi-draw per level) against the fastest way
 // to draw the same triangles: each level's mesh uploaded once and drawn with glDrawElementsInstanced, one copy per
 // walker at its position. Same target, material and camera; ground and skeletons off; each timed to glFinish.
-nlohmann::json render_bench(CrowdScene& scene, const BenchOptions& o) {
+nlohmann::json render_bench(Crowd& scene, const BenchOptions& o) {
   auto context = create_headless_gl_context();
   SkeletonRenderer renderer(o.width, o.height);
   renderer.options().draw_ground = false;
   renderer.options().draw_skeleton = false;
   const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
   OrbitCamera camera;
-  glm::vec3 lo, hi;
+  RenderScratch scratch;
   Profiler unused(1, false);
-  scene.simulate(1.0f / o.fps, unused);
-  if (!body_bounds(scene, lo, hi)) throw std::runtime_error("--render needs a body (--level 0, 1, 2, auto or S1..S3)");
-  camera.frame_box_tight(lo, hi, aspect);
-  scene.set_view(lod_view(camera, aspect, o.height));
-  SkeletonDrawInput none{&scene.rig().skeleton, {}, 0};
+  step(scene, 1.0f / o.fps, unused);
+  if (scene.skin.level.is_none() || body_draw_inputs(scene).empty())
+    throw std::runtime_error("--render needs a body (--level 0, 1, 2, auto or S1..S3)");
+  frame_crowd(scene, camera, aspect, scratch);
+  set_crowd_camera(scene, camera, aspect, o.height);
   double crowd_s = 0.0, raw_s = 0.0;
   std::size_t crowd_triangles = 0, raw_triangles = 0;
   std::vector<glm::vec3> offsets;
   for (std::size_t f = 0; f < std::min<std::size_t>(o.frames, 30); ++f) {
-    scene.simulate(1.0f / o.fps, unused);
-    const std::vector<BodyDrawInput> inputs = body_draw_inputs(scene);
-    const auto draws = scene.body_draws();
+    step(scene, 1.0f / o.fps, unused);
     renderer.finish();
     auto t0 = std::chrono::steady_clock::now();
-    renderer.render(none, camera.view(), camera.projection(aspect), inputs);
+    render_frame(scene, renderer, camera, aspect, o.height, scratch);
     renderer.finish();
     auto t1 = std::chrono::steady_clock::now();
     if (f > 0) crowd_s += std::chrono::duration<double>(t1 - t0).count(), crowd_triangles += renderer.triangles_drawn();
     // The reference: per level, that level's mesh (the first skinned walker's, placed at the origin) instanced
     // at every walker of the level, which moves it as far as the walker went.
-    for (std::size_t k = 0; k < inputs.size(); ++k) {
-      const SkinnedCrowd& skin = *draws[k].skinned;
+    const std::vector<BodyDrawInput> inputs = body_draw_inputs(scene);
+    for (const BodyDrawInput& input : inputs) {
       offsets.clear();
-      const glm::vec3 first = skin.position(0, 0);
-      for (std::size_t w = 0; w < skin.walkers; ++w) offsets.push_back(skin.position(w, 0) - first);
+      const glm::vec3 first(input.px[0], input.py[0], input.pz[0]);
+      for (std::size_t w = 0; w < input.walker_count; ++w) {
+        const std::size_t i = w * input.stride;
+        offsets.push_back(glm::vec3(input.px[i], input.py[i], input.pz[i]) - first);
+      }
       renderer.finish();
       t0 = std::chrono::steady_clock::now();
-      renderer.render_instanced_reference(inputs[k], offsets, camera.view(), camera.projection(aspect));
+      renderer.render_instanced_reference(input, offsets, camera.view(), camera.projection(aspect));
       renderer.finish();
       t1 = std::chrono::steady_clock::now();
       if (f > 0) raw_s += std::chrono::duration<double>(t1 - t0).count(), raw_triangles += renderer.triangles_drawn();
@@ -93,31 +95,41 @@ int run_bench(const BenchOptions& o) {
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
-    std::unique_ptr<CrowdScene> scene = build_scene(o.scene);
-    // Warm-up frames settle caches and the thread pool; they are not measured.
+    std::unique_ptr<Crowd> scene = build_scene(o.scene);
+    // Warm-up frames settle caches and the thread pool; they are not measured. After the first, a camera framing
+    // the crowd (as strata crowd's) is handed to the level-of-detail stage, so the timed frames are the frame every
+    // command runs, culling and --level auto included.
     Profiler warmup(8, false);
-    for (int f = 0; f < 3; ++f) scene->simulate(1.0f / o.fps, warmup);
+    step(*scene, 1.0f / o.fps, warmup);
+    {
+      OrbitCamera camera;
+      RenderScratch scratch;
+      const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
+      frame_crowd(*scene, camera, aspect, scratch);
+      set_crowd_camera(*scene, camera, aspect, o.height);
+    }
+    for (int f = 1; f < 3; ++f) step(*scene, 1.0f / o.fps, warmup);
     Profiler profiler(o.frames, false);
     const auto start = std::chrono::steady_clock::now();
     for (std::size_t f = 0; f < o.frames; ++f) {
       profiler.begin_frame();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
-        scene->simulate(1.0f / o.fps, profiler);
+        step(*scene, 1.0f / o.fps, profiler);
       }
       profiler.end_frame();
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double frame_ms = 1000.0 * seconds / static_cast<double>(o.frames);
     // Vertices per walker of the (finest) level drawn; under --level auto with no camera every walker is at 0.
-    const auto draws = scene->body_draws();
-    const std::size_t vertices = draws.empty() ? 0 : draws.front().skinned->vertex_count;
+    const std::vector<BodyDrawInput> draws = body_draw_inputs(*scene);
+    const std::size_t vertices = draws.empty() ? 0 : draws.front().vertex_count;
     nlohmann::json j;
     j["walkers"] = scene->walker_count();
     j["frames"] = o.frames;
     j["threads"] = threads;
-    j["level"] = scene->body_level();
-    j["level_name"] = body_level_name(scene->body_level());
+    j["level"] = scene->skin.level.json_code();
+    j["level_name"] = scene->skin.level.name();
     j["vertices_per_walker"] = vertices;
     j["frame_ms"] = frame_ms;
     j["walkers_per_second"] = static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms;
@@ -139,7 +151,7 @@ int run_bench(const BenchOptions& o) {
     if (!o.json.empty()) write_json_file(o.json, j);
     std::printf("strata bench: %zu walkers x %zu frames, level %s (%zu vertices each), %d threads: %.2f ms/frame, "
                 "%.0f walker-frames/s\n",
-                scene->walker_count(), o.frames, body_level_name(scene->body_level()).c_str(), vertices, threads, frame_ms,
+                scene->walker_count(), o.frames, scene->skin.level.name().c_str(), vertices, threads, frame_ms,
                 static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms);
     profiler.print_table(std::cout);
   } catch (const std::exception& e) {

@@ -22,11 +22,21 @@
 #include "systems/animation_sample.h"
 #include "render/gl_context.h"
 #include "render/skeleton_renderer.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/pose_gather.h"
+#include "scene/state_hash.h"
+#include "scene/step.h"
 
 namespace strata::cli {
 namespace {
+
+// The clip the first walker plays (a clip index, kAllClips or kRestPose): what summary.json reports as "clip".
+int first_walker_clip(const Crowd& crowd) {
+  const std::vector<Entity> walkers = crowd.world.entities();
+  if (walkers.empty()) return kRestPose;
+  const EntityLocation at = crowd.world.location(walkers.front());
+  return static_cast<int>(crowd.world.table(at.table).f32(kWalkerClock, 2)[at.block]);
+}
 
 struct CrowdOptions {
   SceneOptions scene;
@@ -74,14 +84,14 @@ int run_crowd(const CrowdOptions& o) {
   }
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-  std::unique_ptr<CrowdScene> built;
+  std::unique_ptr<Crowd> built;
   try {
     built = build_scene(o.scene);
   } catch (const std::exception& e) {
     std::cerr << "strata crowd: " << e.what() << "\n";
     return 1;
   }
-  CrowdScene& scene = *built;
+  Crowd& scene = *built;
   std::error_code ec;
   fs::create_directories(o.out, ec);
   if (ec) {
@@ -92,8 +102,10 @@ int run_crowd(const CrowdOptions& o) {
   try {
     auto context = create_headless_gl_context();
     SkeletonRenderer renderer(o.width, o.height);
-    const bool bodies = scene.body_level() >= 0;
-    renderer.options().draw_skeleton = !bodies || o.skeleton_overlay;
+    const bool bodies = !scene.skin.level.is_none();
+    RenderScratch scratch;
+    RenderFrameOptions draw;
+    draw.skeleton_overlay = o.skeleton_overlay;
     Profiler profiler(120, true);
     OrbitCamera camera;
     camera.yaw = o.camera_yaw;
@@ -120,11 +132,10 @@ int run_crowd(const CrowdOptions& o) {
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
         const auto frame_start = std::chrono::steady_clock::now();
-        scene.simulate(dt, profiler);
+        step(scene, dt, profiler);
         {
           STRATA_PROFILE_SCOPE(profiler, "render");
-          WalkerLanes lanes = scene.lanes();
-          gather_joint_positions(lanes, joints);
+          gather_crowd_joints(scene, joints);
           if (f == 0) {
             // Frame the crowd once from its first pose; a camera that re-fits every frame would pump. Bodies
             // reach past the joints (the skull above skullbase, the soles below the ankles).
@@ -135,11 +146,8 @@ int run_crowd(const CrowdOptions& o) {
             glm::vec3 lo, hi;
             if (joint_bounds(joints, lo, hi)) camera.target = 0.5f * (lo + hi);
           }
-          SkeletonDrawInput input{&scene.rig().skeleton, joints, scene.walker_count()};
-          const std::vector<BodyDrawInput> body_inputs = body_draw_inputs(scene);
-          renderer.render(input, camera.view(), camera.projection(aspect), body_inputs);
           // From the next frame on, walkers outside this camera are culled and --level auto picks by size.
-          scene.set_view(lod_view(camera, aspect, o.height));
+          render_frame(scene, renderer, camera, aspect, o.height, scratch, draw);
           renderer.read_rgba(pixels);
         }
         simulate_render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - frame_start).count();
@@ -180,13 +188,13 @@ int run_crowd(const CrowdOptions& o) {
                            {"joints", scene.rig().skeleton.joint_count()},
                            {"segments", scene.rig().skeleton.segments.size()},
                            {"sites", scene.rig().skeleton.sites.size()}};
-    const int clip = scene.clip_of(0);
-    summary["body_level"] = scene.body_level();
-    summary["body_level_name"] = body_level_name(scene.body_level());
+    const int clip = first_walker_clip(scene);
+    summary["body_level"] = scene.skin.level.json_code();
+    summary["body_level_name"] = scene.skin.level.name();
     // Vertices per walker of the finest level drawn in the last frame (under --level auto, levels vary by walker).
-    const auto draws = scene.body_draws();
-    summary["body_vertices"] = bodies && !draws.empty() ? draws.front().skinned->vertex_count : 0;
-    const auto lod = scene.lod_counts();
+    const std::vector<BodyDrawInput> draws = body_draw_inputs(scene);
+    summary["body_vertices"] = bodies && !draws.empty() ? draws.front().vertex_count : 0;
+    const auto lod = scene.lod.counts;
     // Walkers skinned and drawn at each level in the last frame, and walkers the camera did not see.
     summary["lod_last_frame"] = {{"level0", lod[0]}, {"level1", lod[1]}, {"level2", lod[2]}, {"culled", lod[3]}};
     summary["triangles_drawn_last_frame"] = renderer.triangles_drawn();
@@ -196,7 +204,7 @@ int run_crowd(const CrowdOptions& o) {
     summary["gl_version"] = context->version();
     summary["wall_s"] = wall;
     summary["fps"] = static_cast<double>(o.frames) / wall;
-    summary["state_hash"] = scene.state_hash();
+    summary["state_hash"] = state_hash(scene);
     nlohmann::json systems = nlohmann::json::array();
     for (const SystemStats& s : profiler.stats())
       systems.push_back({{"name", s.name}, {"samples", s.samples}, {"min_ms", s.min_ms}, {"mean_ms", s.mean_ms},
@@ -209,11 +217,8 @@ int run_crowd(const CrowdOptions& o) {
     Profiler table1_profiler(1, false);
     const std::vector<Table1Row> table1 = measure_table1(
         scene, static_cast<double>(o.frames) / simulate_render_s, o.frames, o.table1_frames, [&] {
-          scene.simulate(dt, table1_profiler);
-          WalkerLanes lanes = scene.lanes();
-          gather_joint_positions(lanes, joints);
-          SkeletonDrawInput input{&scene.rig().skeleton, joints, scene.walker_count()};
-          renderer.render(input, camera.view(), camera.projection(aspect), body_draw_inputs(scene));
+          step(scene, dt, table1_profiler);
+          render_frame(scene, renderer, camera, aspect, o.height, scratch, draw);
           renderer.read_rgba(pixels);
         });
     summary["table1"] = table1_json(table1);

@@ -11,6 +11,7 @@
 #include "apps/scene_options.h"
 #include "render/scene_draw.h"
 #include "systems/gait_metrics.h"
+#include "scene/step.h"
 
 namespace strata::cli {
 namespace {
@@ -28,15 +29,15 @@ int run_gait_report(const GaitReportOptions& o) {
   try {
     SceneOptions scene_options = o.scene;
     scene_options.motion = "walk";
-    std::unique_ptr<CrowdScene> scene = build_scene(scene_options);
-    GaitMetrics metrics(scene->rig().skeleton, *scene->locomotion_rig(), scene->style());
+    std::unique_ptr<Crowd> scene = build_scene(scene_options);
+    GaitMetrics metrics(scene->rig().skeleton, *scene->motion.locomotion.get(), scene->motion.style);
     Profiler profiler(120, false);
     const float dt = 1.0f / o.fps;
     const auto frames = static_cast<std::size_t>(o.seconds * o.fps + 0.5);
     for (std::size_t f = 0; f < frames; ++f) {
       profiler.begin_frame();
-      scene->simulate(dt, profiler);
-      metrics.observe(scene->lanes(), scene->paths(), dt);
+      step(*scene, dt, profiler);
+      metrics.observe(scene->lanes(), scene->motion.paths, dt);
       profiler.end_frame();
     }
     const GaitReport r = metrics.report();

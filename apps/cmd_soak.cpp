@@ -23,6 +23,7 @@
 #include "render/gl_context.h"
 #include "render/skeleton_renderer.h"
 #include "systems/pose_gather.h"
+#include "scene/step.h"
 
 namespace strata::cli {
 namespace {
@@ -63,17 +64,15 @@ int run_soak(const SoakOptions& o) {
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
-    std::unique_ptr<CrowdScene> scene = build_scene(o.scene);
+    std::unique_ptr<Crowd> scene = build_scene(o.scene);
     std::unique_ptr<GlContext> context;
     std::unique_ptr<SkeletonRenderer> renderer;
     OrbitCamera camera;
-    std::vector<glm::vec3> joints;
+    RenderScratch scratch;
     std::vector<std::uint8_t> pixels;
-    const bool bodies = scene->body_level() >= 0;
     if (o.render) {
       context = create_headless_gl_context();
       renderer = std::make_unique<SkeletonRenderer>(o.width, o.height);
-      renderer->options().draw_skeleton = !bodies;
     }
     // A rolling window and no trace: the profiler itself must not grow with the run.
     Profiler profiler(120, false);
@@ -97,15 +96,15 @@ int run_soak(const SoakOptions& o) {
       }
       if (t >= o.seconds) break;
       profiler.begin_frame();
-      scene->simulate(dt, profiler);
+      step(*scene, dt, profiler);
+      // The camera follows the crowd, and the next step culls and levels against it, rendered or not: the soak
+      // runs the frame every command runs.
+      frame_crowd(*scene, camera, aspect, scratch);
       if (renderer) {
-        WalkerLanes lanes = scene->lanes();
-        gather_joint_positions(lanes, joints);
-        glm::vec3 lo, hi;
-        if (bodies ? body_bounds(*scene, lo, hi) : joint_bounds(joints, lo, hi)) camera.frame_box_tight(lo, hi, aspect);
-        SkeletonDrawInput input{&scene->rig().skeleton, joints, scene->walker_count()};
-        renderer->render(input, camera.view(), camera.projection(aspect), body_draw_inputs(*scene));
+        render_frame(*scene, *renderer, camera, aspect, o.height, scratch);
         renderer->read_rgba(pixels);
+      } else {
+        set_crowd_camera(*scene, camera, aspect, o.height);
       }
       profiler.end_frame();
       ++frames;
@@ -133,7 +132,7 @@ int run_soak(const SoakOptions& o) {
     nlohmann::json j;
     j["command"] = "soak";
     j["walkers"] = scene->walker_count();
-    j["level"] = scene->body_level();
+    j["level"] = scene->skin.level.json_code();
     j["render"] = o.render;
     j["threads"] = threads;
     j["paced_fps"] = o.unpaced ? nlohmann::json(nullptr) : nlohmann::json(o.fps);

@@ -25,10 +25,12 @@
 #include "render/gl_context.h"
 #include "render/gl_context_glfw.h"
 #include "render/skeleton_renderer.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/pose_gather.h"
 #include "ui/imgui_layer.h"
 #include "ui/view_panel.h"
+#include "scene/body_settings.h"
+#include "scene/step.h"
 
 namespace strata::cli {
 namespace {
@@ -59,18 +61,14 @@ std::string timing_title(const Profiler& profiler, double fps) {
 }
 
 // Draws the session's scene from `camera` (bodies in the binding editor's colours while it runs) and hands the
-// camera to culling and --level auto for the next frame. `joints`: gather_joint_positions of this frame.
+// camera to culling and --level auto for the next frame (render_frame, the render half of every command's frame).
 void render_scene(ViewSession& session, SkeletonRenderer& renderer, const OrbitCamera& camera, float aspect,
-                  int viewport_height, std::span<const glm::vec3> joints) {
-  CrowdScene& scene = session.scene();
-  std::vector<BodyDrawInput> bodies = body_draw_inputs(scene);
-  session.colour_draws(bodies);
+                  int viewport_height, RenderScratch& scratch) {
   ViewPanelState& panel = session.panel();
-  renderer.options().draw_skeleton = bodies.empty() || panel.show_skeleton;
-  renderer.render({&scene.rig().skeleton, joints, scene.walker_count()}, camera.view(), camera.projection(aspect),
-                  bodies);
-  panel.triangles_drawn = renderer.triangles_drawn();
-  scene.set_view(lod_view(camera, aspect, viewport_height));
+  RenderFrameOptions options;
+  options.skeleton_overlay = panel.show_skeleton;
+  options.recolour = [&session](std::vector<BodyDrawInput>& bodies) { session.colour_draws(bodies); };
+  panel.triangles_drawn = render_frame(session.scene(), renderer, camera, aspect, viewport_height, scratch, options);
 }
 
 // Frames per second from the profiler's rolling mean frame time; 0 before the first frame.
@@ -106,21 +104,22 @@ int run_view_headless(const ViewOptions& o) {
     Profiler profiler(120, false);
     OrbitCamera camera;
     const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
-    std::vector<glm::vec3> joints;
+    RenderScratch scratch;
+    std::vector<glm::vec3>& joints = scratch.joints;
     const std::size_t frames = o.frames ? o.frames : 30;
     ViewPanelState& panel = session.panel();
     for (std::size_t f = 0; f < frames; ++f) {
       session.apply_binding_requests();
-      CrowdScene& scene = session.scene();
+      Crowd& scene = session.scene();
       profiler.begin_frame();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
         session.advance(1.0f / 30.0f, profiler);
         STRATA_PROFILE_SCOPE(profiler, "render");
-        gather_joint_positions(scene.lanes(), joints);
+        gather_crowd_joints(scene, joints);
         glm::vec3 lo, hi;
         if (f == 0 && (body_bounds(scene, lo, hi) || joint_bounds(joints, lo, hi))) camera.frame_box(lo, hi, aspect);
-        render_scene(session, renderer, camera, aspect, o.height, joints);
+        render_scene(session, renderer, camera, aspect, o.height, scratch);
         if (ui) {
           STRATA_PROFILE_SCOPE(profiler, "ui");
           UiFrameInput in;
@@ -167,7 +166,8 @@ int run_view(const ViewOptions& o) {
     if (!o.no_panel) ui.emplace(window.native_handle());
     Profiler profiler(120, false);
     OrbitCamera camera;
-    std::vector<glm::vec3> joints;
+    RenderScratch scratch;
+    std::vector<glm::vec3>& joints = scratch.joints;
     std::vector<std::uint8_t> pixels;
     bool framed = false;
     std::size_t frame = 0, screenshots = 0;
@@ -186,15 +186,15 @@ int run_view(const ViewOptions& o) {
       const bool editing = panel.binding.active;
       // Editing: the left button selects; Alt+left still orbits.
       if (editing && !input.alt) input.orbit_drag = glm::vec2(0.0f);
-      CrowdScene& scene = session.scene();
-      if (input.level_steps > 0 && scene.body_level() >= 0) {
-        const std::vector<int> levels = selectable_body_levels(scene);
+      Crowd& scene = session.scene();
+      if (input.level_steps > 0 && !scene.skin.level.is_none()) {
+        const std::vector<DetailLevel> levels = selectable_body_levels(scene);
         if (!levels.empty()) {
-          const auto at = std::find(levels.begin(), levels.end(), scene.body_level());
+          const auto at = std::find(levels.begin(), levels.end(), scene.skin.level);
           const std::size_t from = at == levels.end() ? 0 : static_cast<std::size_t>(at - levels.begin());
-          scene.set_body_level(levels[(from + static_cast<std::size_t>(input.level_steps)) % levels.size()]);
-          scene.simulate(0.0f, profiler);  // fill the new level's output before it is drawn
-          std::cout << "strata view: body level " << body_level_name(scene.body_level()) << "\n";
+          set_detail_level(scene, levels[(from + static_cast<std::size_t>(input.level_steps)) % levels.size()]);
+          step(scene, 0.0f, profiler);  // fill the new level's output before it is drawn
+          std::cout << "strata view: body level " << scene.skin.level.name() << "\n";
         }
       }
       if (input.resized) {
@@ -211,10 +211,10 @@ int run_view(const ViewOptions& o) {
       profiler.begin_frame();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
-        const int level_before = scene.body_level();
+        const DetailLevel level_before = scene.skin.level;
         session.advance(dt, profiler);
         STRATA_PROFILE_SCOPE(profiler, "render");
-        gather_joint_positions(scene.lanes(), joints);
+        gather_crowd_joints(scene, joints);
         if (!framed || panel.frame_camera_requested) {
           glm::vec3 lo, hi;
           if (joint_bounds(joints, lo, hi)) camera.frame_box(lo, hi, aspect);
@@ -236,7 +236,7 @@ int run_view(const ViewOptions& o) {
           session.binding_mouse(mouse, camera.projection(aspect) * camera.view(), fb);
           panel.binding.pixels_per_unit = scale;  // the outline is drawn in window units
         }
-        render_scene(session, renderer, camera, aspect, fb.y, joints);
+        render_scene(session, renderer, camera, aspect, fb.y, scratch);
         if (panel.screenshot_requested) {
           panel.screenshot_requested = false;
           // The scene without the panel: a screenshot is for showing the crowd, not the tool.
@@ -258,7 +258,7 @@ int run_view(const ViewOptions& o) {
           window.set_ui_capture(ui->wants_mouse(), ui->wants_keyboard());
         }
         // A level picked in the panel is skinned on the next frame; fill it now so nothing blinks.
-        if (scene.body_level() != level_before) scene.simulate(0.0f, profiler);
+        if (scene.skin.level != level_before) step(scene, 0.0f, profiler);
         window.swap_buffers();
       }
       profiler.end_frame();

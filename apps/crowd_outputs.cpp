@@ -13,15 +13,16 @@
 #include <nlohmann/json.hpp>
 
 #include "rig/binding.h"
+#include "scene/body_settings.h"
 
 namespace strata::cli {
 
-std::vector<Table1Row> measure_table1(CrowdScene& scene, double drawn_fps, std::size_t drawn_frames,
+std::vector<Table1Row> measure_table1(Crowd& scene, double drawn_fps, std::size_t drawn_frames,
                                       std::size_t extra_frames, const std::function<void()>& frame) {
   std::vector<Table1Row> rows;
   const Body* body = scene.rig().body.get();
   if (!body) return rows;
-  const int drawn = scene.body_level();
+  const DetailLevel drawn = scene.skin.level;
   for (std::size_t l = 0; l < body->levels.size(); ++l) {
     const BodyLevel& level = body->levels[l];
     const BindingStats stats = binding_stats(level.binding);
@@ -32,14 +33,14 @@ std::vector<Table1Row> measure_table1(CrowdScene& scene, double drawn_fps, std::
     row.one_joint = stats.one_joint;
     row.two_joints = stats.two_joints;
     row.more_joints = stats.more_joints;
-    if (row.level == drawn) {
+    if (DetailLevel::mesh(row.level) == drawn) {
       row.fps = drawn_fps;
       row.fps_frames = drawn_frames;
       row.fps_source = "crowd run";
     } else if (extra_frames > 0) {
       // The crowd goes on walking at the other level: the same walkers, camera and renderer, so the only change
       // is the mesh resolution. Restarting the scene instead would time a different stretch of the walk.
-      scene.set_body_level(row.level);
+      set_detail_level(scene, DetailLevel::mesh(row.level));
       frame();  // untimed: the renderer uploads the new level's index buffer on its first frame
       const auto start = std::chrono::steady_clock::now();
       for (std::size_t f = 0; f < extra_frames; ++f) frame();
@@ -50,7 +51,7 @@ std::vector<Table1Row> measure_table1(CrowdScene& scene, double drawn_fps, std::
     }
     rows.push_back(row);
   }
-  if (scene.body_level() != drawn) scene.set_body_level(drawn);
+  if (scene.skin.level != drawn) set_detail_level(scene, drawn);
   return rows;
 }
 

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 
 namespace strata::cli {
 
@@ -30,7 +30,7 @@ struct Table1Row {
 // call first, so buffer uploads for the new level are not counted), then the drawn level is restored. With
 // extra_frames = 0 the other levels get no fps. `frame` must simulate one frame and render it as the crowd run
 // does, so the numbers compare.
-std::vector<Table1Row> measure_table1(CrowdScene& scene, double drawn_fps, std::size_t drawn_frames,
+std::vector<Table1Row> measure_table1(Crowd& scene, double drawn_fps, std::size_t drawn_frames,
                                       std::size_t extra_frames, const std::function<void()>& frame);
 nlohmann::json table1_json(const std::vector<Table1Row>& rows);
 

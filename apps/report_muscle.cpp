@@ -24,6 +24,8 @@
 #include "systems/muscle.h"
 #include "systems/pose_gather.h"
 #include "reference/skin_reference.h"
+#include "scene/body_settings.h"
+#include "scene/step.h"
 
 namespace strata::cli {
 namespace {
@@ -46,7 +48,7 @@ class PosedWalker {
     o.walkers = 1;
     o.rest = true;
     o.motion = "clip";
-    o.level = level;
+    o.level = DetailLevel::mesh(level);
     scene_ = build_scene(o);
     const Skeleton& s = scene_->rig().skeleton;
     shoulder_ = s.find_joint("l_shoulder");
@@ -58,7 +60,7 @@ class PosedWalker {
     for (int c = 0; c < 5; ++c) l.at(l.placement, c)[0] = placement[c];
   }
 
-  CrowdScene& scene() { return *scene_; }
+  Crowd& scene() { return *scene_; }
 
   // Arm raised forward by `raise` degrees at the shoulder, elbow flexed by `flex` degrees (both about -X in
   // H-Anim: towards the front).
@@ -72,13 +74,13 @@ class PosedWalker {
 
   // fk -> muscle -> skin with the given force gain (0 = pure linear blend skinning on the same layout).
   const SkinnedCrowd& run(float gain) {
-    MuscleGains gains = scene_->muscle_gains();
+    MuscleGains gains = scene_->skin.gains;
     gains.global = gain;
-    scene_->set_muscle_gains(gains);
+    set_muscle_gains(*scene_, gains);
     const WalkerLanes l = scene_->lanes();
     fk_system(scene_->rig().skeleton, l);
     muscle_system(scene_->rig().muscles->set, l);
-    skin_system(scene_->skin_layout(), l, out_);
+    skin_system(current_layout(*scene_), l, out_);
     return out_;
   }
 
@@ -86,8 +88,8 @@ class PosedWalker {
   double bulge(int muscle) {
     const SkinnedCrowd lbs = run(0.0f);
     const SkinnedCrowd& with = run(1.0f);
-    const SkinLayout& layout = scene_->skin_layout();
-    const MuscleBinding& binding = scene_->rig().muscles->levels[static_cast<std::size_t>(scene_->body_level())];
+    const SkinLayout& layout = current_layout(*scene_);
+    const MuscleBinding& binding = scene_->rig().muscles->levels[static_cast<std::size_t>(scene_->skin.level.index())];
     double best = -1e30;
     for (std::size_t i = 0; i < layout.vertex_count; ++i) {
       const std::uint32_t b = layout.muscle_slot[i];
@@ -109,7 +111,7 @@ class PosedWalker {
     for (int c = 0; c < 4; ++c) l.at(l.local_rotation, std::size_t(joint) * 4 + c)[0] = v[c];
   }
 
-  std::unique_ptr<CrowdScene> scene_;
+  std::unique_ptr<Crowd> scene_;
   int shoulder_ = -1, elbow_ = -1;
   SkinnedCrowd out_;
 };
@@ -128,14 +130,14 @@ std::size_t count_non_finite(const SkinnedCrowd& s) {
 std::size_t walk_nan_count(int level, const MuscleReportOptions& o) {
   SceneOptions so;
   so.walkers = 4;
-  so.level = level;
-  std::unique_ptr<CrowdScene> scene = build_scene(so);
+  so.level = DetailLevel::mesh(level);
+  std::unique_ptr<Crowd> scene = build_scene(so);
   Profiler profiler(8, false);
   std::size_t bad = 0;
   const auto frames = static_cast<int>(o.seconds * o.fps);
   for (int f = 0; f < frames; ++f) {
-    scene->simulate(1.0f / o.fps, profiler);
-    bad += count_non_finite(scene->skinned());
+    step(*scene, 1.0f / o.fps, profiler);
+    bad += count_non_finite(current_skinned(*scene));
     const WalkerLanes l = scene->lanes();
     for (std::size_t w = 0; w < l.count; ++w)
       for (std::size_t p = 0; p < l.muscle_points; ++p)
@@ -148,16 +150,16 @@ std::size_t walk_nan_count(int level, const MuscleReportOptions& o) {
 // The kernel's output (layout order, world space; the walker stands at the origin unscaled) against the scalar
 // twin with muscles, largest position difference in metres.
 double kernel_vs_reference(PosedWalker& walker) {
-  CrowdScene& scene = walker.scene();
+  Crowd& scene = walker.scene();
   const SkinnedCrowd& kernel = walker.run(1.0f);
   const WalkerLanes l = scene.lanes();
-  const auto level = static_cast<std::size_t>(scene.body_level());
+  const auto level = static_cast<std::size_t>(scene.skin.level.index());
   const BodyLevel& body = scene.rig().body->levels[level];
   const std::vector<float> force = walker_muscle_forces(l, 0);
-  const MuscleReference m{&scene.rig().muscles->set, &scene.rig().muscles->levels[level], scene.muscle_gains(), force};
+  const MuscleReference m{&scene.rig().muscles->set, &scene.rig().muscles->levels[level], scene.skin.gains, force};
   const SkinnedVertices ref = skin_reference(body.mesh, body.binding, walker_skinning_matrices(l, 0), m);
   double worst = 0.0;
-  const SkinLayout& layout = scene.skin_layout();
+  const SkinLayout& layout = current_layout(scene);
   for (std::size_t i = 0; i < layout.vertex_count; ++i)
     worst = std::max(worst, double(glm::length(kernel.position(0, i) - ref.positions[layout.original[i]])));
   return worst;
@@ -170,7 +172,7 @@ void write_figure(PosedWalker& walker, const std::filesystem::path& dir) {
   SkeletonRenderer renderer(kPanel, kPanel);
   renderer.options().draw_skeleton = false;
   renderer.options().draw_ground = false;
-  CrowdScene& scene = walker.scene();
+  Crowd& scene = walker.scene();
   struct Shot {
     float flex, gain;
   };
@@ -188,7 +190,7 @@ void write_figure(PosedWalker& walker, const std::filesystem::path& dir) {
       camera.frame_box_tight(lo, hi, 1.0f, 1.05f);
     }
     BodyDrawInput bodies;
-    bodies.triangles = scene.skin_layout().triangles;
+    bodies.triangles = current_layout(scene).triangles;
     bodies.px = skin.px.data(), bodies.py = skin.py.data(), bodies.pz = skin.pz.data();
     bodies.nx = skin.nx.data(), bodies.ny = skin.ny.data(), bodies.nz = skin.nz.data();
     bodies.stride = skin.stride;

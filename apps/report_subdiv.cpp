@@ -24,8 +24,11 @@
 #include "rig/body_rig.h"
 #include "rig/subdiv_refiner.h"
 #include "systems/fk.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/subdiv.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata::cli {
 namespace {
@@ -206,14 +209,14 @@ int run_subdiv_report(const SubdivReportOptions& o) {
     const Body& body = *rig.body;
     if (!body.cage) throw std::runtime_error("the default body has no cage");
     const Skeleton skeleton = rig.skeleton;
-    CrowdScene scene(std::move(rig));
+    Crowd scene(std::move(rig));
     CrowdConfig config;
     config.walkers = 1;
     config.motion = MotionSource::Walk;
-    scene.spawn_crowd(config);
-    scene.set_body_level(-1);
+    spawn_crowd(scene, config);
+    set_detail_level(scene, DetailLevel::none());
     Profiler profiler(8, false);
-    for (int f = 0; f < 24; ++f) scene.simulate(1.0f / 60.0f, profiler);  // mid-stride: a walking pose
+    for (int f = 0; f < 24; ++f) step(scene, 1.0f / 60.0f, profiler);  // mid-stride: a walking pose
     const WalkerLanes lanes = scene.lanes();
 
     nlohmann::json out;

@@ -22,26 +22,20 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   cmd.add_option("--seed", o.seed, "Seed for per-walker phase, rate and heading")->capture_default_str();
   cmd.add_option("--spacing", o.spacing, "Metres between walkers on the grid")->capture_default_str();
   cmd.add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
-  // S1..S3 become their level numbers (components/body.h) before CLI11 parses the int.
+  // Parsed by DetailLevel::parse, the one place that knows level names; the validator runs first so a bad value
+  // is a usage error naming the flag rather than an exception from the callback.
   const CLI::Validator body_level(
       [](std::string& value) -> std::string {
-        if (value.size() == 2 && (value[0] == 'S' || value[0] == 's') && value[1] >= '1' && value[1] <= '3') {
-          value = std::to_string(subdiv_level(value[1] - '0'));
-          return {};
-        }
-        if (value == "auto") {
-          value = std::to_string(kAutoBodyLevel);
-          return {};
-        }
-        if (value == "-1" || value == "0" || value == "1" || value == "2") return {};
+        if (DetailLevel::parse(value)) return {};
         return "must be 0, 1, 2, auto, S1, S2, S3 or -1, got '" + value + "'";
       },
       "0|1|2|auto|S1|S2|S3|-1");
-  cmd.add_option("--level", o.level,
-                 "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133); auto: each walker by its height "
-                 "on screen (with hysteresis); S1, S2, S3: the 1,800-vertex cage skinned and Loop-subdivided 1-3 "
-                 "times every frame (7,194 / 28,770 / 115,074 vertices); -1 for skeletons only")
-      ->capture_default_str()->transform(body_level);
+  cmd.add_option_function<std::string>(
+         "--level", [&o](const std::string& value) { o.level = *DetailLevel::parse(value); },
+         "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133); auto: each walker by its height "
+         "on screen (with hysteresis); S1, S2, S3: the 1,800-vertex cage skinned and Loop-subdivided 1-3 "
+         "times every frame (7,194 / 28,770 / 115,074 vertices); -1 for skeletons only")
+      ->check(body_level)->default_str(o.level.name());
   cmd.add_option("--muscles", o.muscles,
                  "Muscle layer: 'default' (the shipped 12 action lines, data/muscles.json), 'none', or a muscle "
                  "file (format: io/muscle_file.h)")->capture_default_str();

@@ -1,4 +1,5 @@
 // Google Benchmark: the FK system's throughput in joints per second over crowds of the shipped skeleton.
+#include <memory>
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -9,24 +10,28 @@
 #include "io/hanim_loader.h"
 #include "systems/animation_sample.h"
 #include "systems/fk.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace {
 
-strata::CrowdScene make_scene(std::size_t walkers) {
-  strata::CrowdScene scene(strata::to_rig(strata::load_default_humanoid()));
+std::unique_ptr<strata::Crowd> make_scene(std::size_t walkers) {
+  auto crowd = std::make_unique<strata::Crowd>(strata::to_rig(strata::load_default_humanoid()));
+  strata::Crowd& scene = *crowd;
   strata::CrowdConfig config;
   config.motion = strata::MotionSource::Clip;
   config.walkers = walkers;
-  scene.spawn_crowd(config);
+  spawn_crowd(scene, config);
   strata::Profiler profiler(120, false);
-  scene.simulate(0.5f, profiler);  // a non-rest pose
-  return scene;
+  step(scene, 0.5f, profiler);  // a non-rest pose
+  return crowd;
 }
 
 void BM_FkSingleThread(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-  strata::CrowdScene scene = make_scene(static_cast<std::size_t>(state.range(0)));
+  std::unique_ptr<strata::Crowd> crowd = make_scene(static_cast<std::size_t>(state.range(0)));
+  strata::Crowd& scene = *crowd;
   strata::WalkerLanes lanes = scene.lanes();
   for (auto _ : state) {
     strata::fk_range(scene.rig().skeleton, lanes, 0, lanes.count);
@@ -39,7 +44,8 @@ BENCHMARK(BM_FkSingleThread)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::k
 
 void BM_AnimationSample(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-  strata::CrowdScene scene = make_scene(static_cast<std::size_t>(state.range(0)));
+  std::unique_ptr<strata::Crowd> crowd = make_scene(static_cast<std::size_t>(state.range(0)));
+  strata::Crowd& scene = *crowd;
   strata::WalkerLanes lanes = scene.lanes();
   for (auto _ : state) {
     strata::animation_system(scene.rig(), lanes, 1.0f / 60.0f);

@@ -12,9 +12,12 @@
 #include "io/hanim_loader.h"
 #include "rig/body_rig.h"
 #include "rig/muscle_binding.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/skin_kernel.h"
 #include "reference/skin_reference.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace {
 
@@ -22,20 +25,20 @@ using namespace strata;
 
 struct Fixture {
   Rig rig;
-  std::unique_ptr<CrowdScene> scene;
+  std::unique_ptr<Crowd> scene;
   std::vector<glm::mat4> matrices;  // the walker's skinning matrices, for the baseline
   explicit Fixture(int level, bool muscles = false) {
     rig = to_rig(load_default_humanoid());
     rig.body = default_bound_body();
     if (muscles) rig.muscles = default_muscle_rig();
-    scene = std::make_unique<CrowdScene>(rig);
+    scene = std::make_unique<Crowd>(rig);
     CrowdConfig config;
     config.walkers = 1;
     config.motion = MotionSource::Walk;
-    scene->spawn_crowd(config);
-    scene->set_body_level(level);
+    spawn_crowd(*scene, config);
+    set_detail_level(*scene, DetailLevel::mesh(level));
     Profiler profiler(8, false);
-    for (int f = 0; f < 10; ++f) scene->simulate(1.0f / 30.0f, profiler);
+    for (int f = 0; f < 10; ++f) step(*scene, 1.0f / 30.0f, profiler);
     matrices = walker_skinning_matrices(scene->lanes(), 0);
   }
 };
@@ -57,7 +60,7 @@ void time_kernel(benchmark::State& state, const SkinLayout& layout, const Walker
 void BM_SkinKernel(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   Fixture f(static_cast<int>(state.range(0)), state.range(1) != 0);
-  const SkinLayout& layout = f.scene->skin_layout();
+  const SkinLayout& layout = current_layout(*f.scene);
   time_kernel(state, layout, f.scene->lanes());
 }
 BENCHMARK(BM_SkinKernel)
@@ -70,7 +73,7 @@ void BM_SkinKernelPortable(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   Fixture f(0, state.range(0) != 0);
   force_skin_kernel_isa(SkinKernelIsa::Portable);
-  time_kernel(state, f.scene->skin_layout(), f.scene->lanes());
+  time_kernel(state, current_layout(*f.scene), f.scene->lanes());
   force_skin_kernel_isa(SkinKernelIsa::Auto);
 }
 BENCHMARK(BM_SkinKernelPortable)->ArgName("muscles")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "components/detail_level.h"
 #include "components/mesh.h"
 
 namespace strata {
@@ -57,26 +58,5 @@ struct Body {
   std::optional<BodyLevel> cage = std::nullopt;
   SubdivSurfaceCache subdiv{};
 };
-
-// Body level numbers, as CrowdScene::set_body_level, `--level` and the reports use them: 0..levels-1 are the
-// meshes (0 finest), -1 is no body, and the cage refined k times (k = 1..3, "S1".."S3") is kSubdivLevelBase + k,
-// i.e. 11, 12, 13. Plain ints rather than an enum so the existing 0/1/2/-1 call sites keep working.
-inline constexpr int kSubdivLevelBase = 10;
-inline constexpr int kMaxSubdivDepth = 3;
-constexpr bool is_subdiv_level(int level) {
-  return level > kSubdivLevelBase && level <= kSubdivLevelBase + kMaxSubdivDepth;
-}
-constexpr int subdiv_level(int depth) { return kSubdivLevelBase + depth; }
-constexpr int subdiv_depth(int level) { return is_subdiv_level(level) ? level - kSubdivLevelBase : 0; }
-// Each walker at its own mesh level, chosen per frame by its projected size (systems/lod.h): `--level auto`.
-inline constexpr int kAutoBodyLevel = 20;
-// "0", "1", "2", "-1", "S1".."S3", "auto".
-inline std::string body_level_name(int level) {
-  if (level == kAutoBodyLevel) return "auto";
-  if (!is_subdiv_level(level)) return std::to_string(level);
-  std::string name = "S";  // appended rather than "S" + std::string, which trips GCC 12's -Wrestrict false positive
-  name += std::to_string(subdiv_depth(level));
-  return name;
-}
 
 }  // namespace strata

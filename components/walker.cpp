@@ -25,7 +25,6 @@ std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t join
   fields[kWalkerMuscleFrame] = {"muscle_frame", ScalarType::F32, p * 6, 0.0f};
   fields[kWalkerMuscleLength] = {"muscle_length", ScalarType::F32, p, 0.0f};
   fields[kWalkerMuscleForce] = {"muscle_force", ScalarType::F32, p, 0.0f};
-  fields[kWalkerLod] = {"lod", ScalarType::F32, 1, -2.0f};
   return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
 }
 
@@ -54,7 +53,6 @@ WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count) {
   lanes.muscle_frame = table.f32_base(kWalkerMuscleFrame);
   lanes.muscle_length = table.f32_base(kWalkerMuscleLength);
   lanes.muscle_force = table.f32_base(kWalkerMuscleForce);
-  lanes.lod = table.f32_base(kWalkerLod);
   return lanes;
 }
 

@@ -81,7 +81,6 @@ enum WalkerField : std::uint32_t {
   kWalkerMuscleFrame,      // P*6: local frame axes y (outward) then z (along the line); x = y cross z
   kWalkerMuscleLength,     // P: the point's length l (mean of its adjacent segments)
   kWalkerMuscleForce,      // P: force factor f = L / max(l, ratio L) - 1 (components/muscle.h)
-  kWalkerLod,              // 1: body level chosen by the lod system (systems/lod.h): -1 culled, -2 not yet decided
   kWalkerFieldCount
 };
 
@@ -110,7 +109,6 @@ struct WalkerLanes {
   float* muscle_frame = nullptr;
   float* muscle_length = nullptr;
   float* muscle_force = nullptr;
-  float* lod = nullptr;
 
   float* at(float* base, std::size_t component) const { return base + component * stride; }
 };

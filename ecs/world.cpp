@@ -92,6 +92,14 @@ void World::move(Entity entity, std::uint32_t to_table) {
   slots_[entity.index - 1].location = {to_table, new_block};
 }
 
+std::vector<Entity> World::entities() const {
+  std::vector<Entity> out;
+  out.reserve(alive_count_);
+  for (std::size_t i = 0; i < slots_.size(); ++i)
+    if (slots_[i].alive) out.push_back(Entity{static_cast<std::uint32_t>(i + 1), slots_[i].generation});
+  return out;
+}
+
 std::vector<std::string> World::validate() const {
   std::vector<std::string> problems;
   auto describe = [](Entity e) {

@@ -36,6 +36,9 @@ class World {
   // Moves a live entity to another table, copying the fields both tables share by name and width.
   void move(Entity entity, std::uint32_t to_table);
   std::size_t alive_count() const { return alive_count_; }
+  // Every live entity in slot order: the order they were created in, for a world whose entities were never
+  // destroyed. A canonical order for hashes and reports, whatever tables the entities have moved through.
+  std::vector<Entity> entities() const;
 
   // Re-derives every invariant (pool <-> tables back-pointers, free list, counts). Returns a description of each
   // violation; empty means consistent. O(entities); meant for tests and a --validate switch.

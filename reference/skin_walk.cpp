@@ -5,8 +5,11 @@
 #include <stdexcept>
 
 #include "reference/skin_metrics.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "reference/skin_reference.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 
@@ -15,19 +18,19 @@ WalkSkinMetrics measure_walk_skin(const Rig& rig_template, const BodyLevel& leve
   auto body = std::make_shared<Body>();
   body->levels.push_back(level);
   rig.body = body;
-  CrowdScene scene(rig);
-  if (!scene.walk_unavailable().empty())
-    throw std::invalid_argument("measure_walk_skin: " + scene.walk_unavailable());
+  Crowd scene(rig);
+  if (!scene.motion.walk_error.empty())
+    throw std::invalid_argument("measure_walk_skin: " + scene.motion.walk_error);
   CrowdConfig config;
   config.walkers = 1;
   config.motion = MotionSource::Walk;
-  scene.spawn_crowd(config);
-  scene.set_body_level(-1);  // skinned here in humanoid space, against the rest mesh
+  spawn_crowd(scene, config);
+  set_detail_level(scene, DetailLevel::none());  // skinned here in humanoid space, against the rest mesh
   Profiler profiler(8, false);
   WalkSkinMetrics out;
   const auto frames = static_cast<int>(seconds * fps);
   for (int f = 0; f < frames; ++f) {
-    scene.simulate(1.0f / fps, profiler);
+    step(scene, 1.0f / fps, profiler);
     const std::vector<glm::mat4> skinning = walker_skinning_matrices(scene.lanes(), 0);
     const SkinnedVertices posed = skin_reference(level.mesh, level.binding, skinning);
     const SkinMetrics m = measure_skin(level.mesh, level.binding, skinning, posed.positions);

@@ -18,7 +18,7 @@ struct WalkSkinMetrics {
 };
 
 // `rig` provides the skeleton (its body, if any, is replaced by `level` alone). Throws std::invalid_argument when
-// the rig cannot walk (CrowdScene::walk_unavailable()).
+// the rig cannot walk (Crowd::walk_unavailable()).
 WalkSkinMetrics measure_walk_skin(const Rig& rig, const BodyLevel& level, float seconds, float fps);
 
 }  // namespace strata

@@ -4,34 +4,63 @@
 
 #include <glm/common.hpp>
 
-namespace strata {
+#include "rig/subdiv_topology.h"
+#include "systems/pose_gather.h"
 
-std::vector<BodyDrawInput> body_draw_inputs(const CrowdScene& scene) {
+namespace strata {
+namespace {
+
+const std::vector<std::uint32_t>* triangles_of(const Crowd& crowd, std::size_t slot) {
+  if (slot == slot_index(DetailSlot::Refined)) return crowd.skin.subdiv ? &crowd.skin.subdiv->triangles : nullptr;
+  if (slot < static_cast<std::size_t>(kMaxMeshLevels)) return &crowd.skin.layouts[slot].triangles;
+  return nullptr;
+}
+
+}  // namespace
+
+std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd) {
   std::vector<BodyDrawInput> inputs;
-  for (const CrowdScene::BodyDraw& d : scene.body_draws()) {
-    const SkinnedCrowd& s = *d.skinned;
+  for (std::size_t slot = 0; slot < kDetailSlots; ++slot) {
+    const SkinnedCrowd& s = crowd.skinned[slot];
+    const std::vector<std::uint32_t>* triangles = triangles_of(crowd, slot);
+    if (s.walkers == 0 || s.vertex_count == 0 || triangles == nullptr) continue;
     BodyDrawInput input;
-    input.triangles = *d.triangles;
+    input.triangles = *triangles;
     input.px = s.px.data(), input.py = s.py.data(), input.pz = s.pz.data();
     input.nx = s.nx.data(), input.ny = s.ny.data(), input.nz = s.nz.data();
     input.stride = s.stride;
     input.vertex_count = s.vertex_count;
-    input.walker_count = s.vertex_count ? s.walkers : 0;
+    input.walker_count = s.walkers;
     inputs.push_back(input);
   }
   return inputs;
 }
 
-bool body_bounds(const CrowdScene& scene, glm::vec3& lo, glm::vec3& hi) {
+bool body_bounds(const Crowd& crowd, glm::vec3& lo, glm::vec3& hi) {
   bool any = false;
-  for (const CrowdScene::BodyDraw& d : scene.body_draws()) {
+  for (std::size_t slot = 0; slot < kDetailSlots; ++slot) {
     glm::vec3 a, b;
-    if (!d.skinned->bounds(a, b)) continue;
+    if (crowd.skinned[slot].walkers == 0 || !crowd.skinned[slot].bounds(a, b)) continue;
     lo = any ? glm::min(lo, a) : a;
     hi = any ? glm::max(hi, b) : b;
     any = true;
   }
   return any;
+}
+
+void gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out) {
+  const std::size_t joints = crowd.joint_count();
+  out.resize(crowd.walker_count() * joints);
+  std::size_t at = 0;
+  std::vector<glm::vec3> table_joints;
+  for (std::size_t slot = 0; slot < kDetailSlots; ++slot) {
+    // walker_lanes wants a mutable table; gathering only reads it.
+    SoaTable& t = const_cast<SoaTable&>(crowd.world.table(crowd.tables[slot]));
+    if (t.size() == 0) continue;
+    gather_joint_positions(walker_lanes(t, crowd.joint_count()), table_joints);
+    std::copy(table_joints.begin(), table_joints.end(), out.begin() + static_cast<std::ptrdiff_t>(at));
+    at += table_joints.size();
+  }
 }
 
 LodView lod_view(const OrbitCamera& camera, float aspect, int viewport_height) {
@@ -40,6 +69,33 @@ LodView lod_view(const OrbitCamera& camera, float aspect, int viewport_height) {
   v.eye = camera.eye();
   v.focal_px = static_cast<float>(viewport_height) / (2.0f * std::tan(0.5f * camera.fov_y));
   return v;
+}
+
+void set_crowd_camera(Crowd& crowd, const OrbitCamera& camera, float aspect, int viewport_height) {
+  crowd.lod.view = lod_view(camera, aspect, viewport_height);
+}
+
+bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderScratch& scratch) {
+  glm::vec3 lo, hi;
+  bool any = !crowd.skin.level.is_none() && body_bounds(crowd, lo, hi);
+  if (!any) {
+    gather_crowd_joints(crowd, scratch.joints);
+    any = joint_bounds(scratch.joints, lo, hi);
+  }
+  if (any) camera.frame_box_tight(lo, hi, aspect);
+  return any;
+}
+
+std::size_t render_frame(Crowd& crowd, SkeletonRenderer& renderer, const OrbitCamera& camera, float aspect,
+                         int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options) {
+  gather_crowd_joints(crowd, scratch.joints);
+  std::vector<BodyDrawInput> bodies = body_draw_inputs(crowd);
+  if (options.recolour) options.recolour(bodies);
+  renderer.options().draw_skeleton = crowd.skin.level.is_none() || options.skeleton_overlay;
+  renderer.render({&crowd.rig().skeleton, scratch.joints, crowd.walker_count()}, camera.view(),
+                  camera.projection(aspect), bodies);
+  set_crowd_camera(crowd, camera, aspect, viewport_height);
+  return renderer.triangles_drawn();
 }
 
 }  // namespace strata

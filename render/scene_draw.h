@@ -1,23 +1,56 @@
 #pragma once
-// The seam between a crowd scene and the renderer: what the body pass draws from the scene's last frame, the
-// bounds a camera frames, and the level-of-detail view a camera gives the scene for the next frame.
+// The seam between a crowd and the renderer, and the render half of every command's frame:
+//
+//   step(crowd, dt, profiler)                 scene/step.h: simulate, choose levels, skin
+//   render_frame(crowd, renderer, camera...)  here: draw what step() left, hand the camera to the next step()
+//
+// Every command that draws calls exactly these two per frame (crowd, view, soak --render, bench --render and the
+// muscle report's figure); bench and soak without rendering hand a camera over with set_crowd_camera(), so
+// culling and levels of detail run in every command's frame.
+#include <functional>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "render/camera.h"
 #include "render/skeleton_renderer.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 
 namespace strata {
 
-// What the renderer needs to draw the scene's skinned bodies from the last simulate(): one input per body level
-// in use (several under --level auto), empty when the scene has no body to draw.
-std::vector<BodyDrawInput> body_draw_inputs(const CrowdScene& scene);
+// What the body pass draws from the crowd's last step(): one input per table skinned (several under
+// DetailLevel::automatic), in slot order; empty when the crowd has no body to draw.
+std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd);
 // Bounds of every skinned vertex drawn; false when none.
-bool body_bounds(const CrowdScene& scene, glm::vec3& lo, glm::vec3& hi);
+bool body_bounds(const Crowd& crowd, glm::vec3& lo, glm::vec3& hi);
+// Every walker's world-space joint positions, walker-major, table by table (the skeleton pass's input and what a
+// camera frames when there are no bodies). Resizes `out` (grown, never shrunk in capacity).
+void gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out);
 // The level-of-detail view (culling, projected sizes) of a camera rendering `viewport_height` pixels high.
 LodView lod_view(const OrbitCamera& camera, float aspect, int viewport_height);
+// Hands `camera` to the crowd's level-of-detail stage: from the next step() on, walkers it does not see are
+// culled and DetailLevel::automatic picks by size.
+void set_crowd_camera(Crowd& crowd, const OrbitCamera& camera, float aspect, int viewport_height);
 
+// Frames `camera` on the crowd as its last step() left it: the skinned bodies' bounds, else the joints' (a rig
+// without a body), tightly (OrbitCamera::frame_box_tight). False, camera untouched, when there is nothing to frame.
+struct RenderScratch;
+bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderScratch& scratch);
+
+// Per-frame scratch a command keeps between frames, so render_frame allocates nothing in steady state.
+struct RenderScratch {
+  std::vector<glm::vec3> joints;
+};
+
+struct RenderFrameOptions {
+  bool skeleton_overlay = false;  // bones and joints over the bodies (always drawn when the level is none)
+  // Called with the body inputs before they are drawn (the binding editor tints weights this way).
+  std::function<void(std::vector<BodyDrawInput>&)> recolour;
+};
+
+// Draws the crowd's last step from `camera` into `renderer`'s target (aspect = width / height of the target,
+// viewport_height its pixel height), then set_crowd_camera(). Returns the body triangles drawn.
+std::size_t render_frame(Crowd& crowd, SkeletonRenderer& renderer, const OrbitCamera& camera, float aspect,
+                         int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options = {});
 
 }  // namespace strata

@@ -20,6 +20,8 @@
 #include "rig/body_rig.h"
 #include "rig/muscle_binding.h"
 #include "rig/skin_from_skeleton.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
 #include "systems/animation_sample.h"
 
 namespace strata {
@@ -84,7 +86,7 @@ Rig load_mesh_rig(const std::string& path) {
   return rig;
 }
 
-std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
+std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   if (!o.binding_overrides.empty() && (!o.mesh.empty() || !o.skeleton.empty()))
     throw std::invalid_argument("--binding-overrides rebinds the shipped body; it cannot go with --mesh or --skeleton");
   Rig rig;
@@ -98,7 +100,7 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
         o.binding_overrides.empty()
             ? std::nullopt
             : std::optional(load_binding_overrides_file(o.binding_overrides, default_binding_tables()));
-    if (o.level >= 0) {
+    if (!o.level.is_none()) {
       if (tables) {
         rig.body = bind_body(default_body().levels, rig.skeleton, BindingMethod::ThreeStep, &default_body().cage,
                              &*tables);
@@ -115,34 +117,34 @@ std::unique_ptr<CrowdScene> build_scene(const SceneOptions& o) {
   config.seed = o.seed;
   config.spacing = o.spacing;
   config.clip = resolve_clip(rig, o.clip, o.rest);
-  auto scene = std::make_unique<CrowdScene>(std::move(rig));
+  auto scene = std::make_unique<Crowd>(std::move(rig));
   if (o.motion == "walk" || o.motion.empty()) {
     const bool implicit = o.motion.empty();
-    if (implicit && (!o.clip.empty() || o.rest || !scene->walk_unavailable().empty())) {
+    if (implicit && (!o.clip.empty() || o.rest || !scene->motion.walk_error.empty())) {
       config.motion = MotionSource::Clip;
     } else {
-      if (!scene->walk_unavailable().empty()) throw std::invalid_argument(scene->walk_unavailable());
+      if (!scene->motion.walk_error.empty()) throw std::invalid_argument(scene->motion.walk_error);
       config.motion = MotionSource::Walk;
     }
   } else if (o.motion == "clip") {
     config.motion = MotionSource::Clip;
   } else if (o.motion.size() > 4 && o.motion.compare(o.motion.size() - 4, 4, ".bvh") == 0) {
     // Motion capture: retargeted onto this skeleton by the Poser -> H-Anim map, feet locked by IK in stance.
-    scene->set_mocap(retarget_bvh(load_bvh_file(o.motion), scene->rig().skeleton));
+    set_mocap(*scene, retarget_bvh(load_bvh_file(o.motion), scene->rig().skeleton));
     config.motion = MotionSource::Mocap;
   } else {
     throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");
   }
-  scene->spawn_crowd(config);
-  scene->set_body_level(o.level);
-  if (is_subdiv_level(o.level) && scene->body_level() != o.level)
-    throw std::invalid_argument("--level " + body_level_name(o.level) +
+  spawn_crowd(*scene, config);
+  set_detail_level(*scene, o.level);
+  if (o.level.is_subdiv() && scene->skin.level != o.level)
+    throw std::invalid_argument("--level " + o.level.name() +
                                 " needs a subdivision cage; only the shipped body has one");
   if (scene->has_muscles()) {
     MuscleGains gains = o.muscle_overrides.empty() ? MuscleGains{}
                                                    : load_muscle_overrides(o.muscle_overrides, scene->rig().muscles->set);
     gains.global *= o.muscle_gain;
-    scene->set_muscle_gains(std::move(gains));
+    set_muscle_gains(*scene, std::move(gains));
   }
   return scene;
 }

@@ -6,7 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "scene/crowd_scene.h"
+#include "components/detail_level.h"
+#include "scene/crowd.h"
 
 namespace strata {
 
@@ -21,7 +22,7 @@ struct SceneOptions {
   std::uint64_t seed = 1;
   float spacing = 1.25f;
   int threads = 0;       // 0 = all cores
-  int level = 0;         // body resolution level drawn (0 finest .. 2, subdiv_level(1..3) = S1..S3); -1 = no body
+  DetailLevel level;     // body resolution drawn (components/detail_level.h); default mesh level 0
   std::string muscles = "default";  // "default" (data/muscles.json), "none", or a muscle file
   float muscle_gain = 1.0f;         // scales every muscle's forces
   std::string muscle_overrides;     // per-muscle gains file (io/muscle_file.h)
@@ -37,7 +38,7 @@ int resolve_clip(const Rig& rig, const std::string& clip, bool rest);
 Rig load_mesh_rig(const std::string& path);
 
 // Loads the rig (LoadError on bad input), resolves the clip and spawns the grid.
-std::unique_ptr<CrowdScene> build_scene(const SceneOptions& options);
+std::unique_ptr<Crowd> build_scene(const SceneOptions& options);
 
 // Worker threads the options ask for, resolved against the machine.
 int thread_count(const SceneOptions& options);

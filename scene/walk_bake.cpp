@@ -7,7 +7,10 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "profiling/profiler.h"
-#include "scene/crowd_scene.h"
+#include "scene/body_settings.h"
+#include "scene/crowd.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -28,18 +31,18 @@ BakedWalk bake_walk(const Rig& rig, const WalkBakeOptions& options) {
   Rig skeleton_only;
   skeleton_only.name = rig.name;
   skeleton_only.skeleton = rig.skeleton;
-  CrowdScene scene(std::move(skeleton_only));
-  if (!scene.walk_unavailable().empty()) throw std::invalid_argument(scene.walk_unavailable());
+  Crowd scene(std::move(skeleton_only));
+  if (!scene.motion.walk_error.empty()) throw std::invalid_argument(scene.motion.walk_error);
   const Skeleton& skeleton = scene.rig().skeleton;
 
   CrowdConfig config;
   config.motion = MotionSource::Walk;
   config.walkers = 1;
   config.seed = options.seed;
-  config.height_mean = scene.locomotion_rig()->rig_height;  // placement scale = height / rig height = 1 exactly
+  config.height_mean = scene.motion.locomotion->rig_height;  // placement scale = height / rig height = 1 exactly
   config.height_spread = 0.0f;
-  scene.spawn_crowd(config);
-  scene.set_body_level(-1);
+  spawn_crowd(scene, config);
+  set_detail_level(scene, DetailLevel::none());
 
   const std::size_t joints = skeleton.joint_count();
   const glm::vec3 c_root = skeleton.centers[0];
@@ -53,7 +56,7 @@ BakedWalk bake_walk(const Rig& rig, const WalkBakeOptions& options) {
   clip.translations[0].joint = 0;
 
   Profiler profiler(1, false);
-  const float step = 1.0f / options.fps;
+  const float frame_dt = 1.0f / options.fps;
   const auto whole_steps = static_cast<std::size_t>(std::floor(static_cast<double>(options.seconds) * options.fps + 1e-3));
   float time = 0.0f;
   // Key 0 is the start state itself (dt = 0 settles IK and FK without advancing the gait), then whole frames of
@@ -61,14 +64,14 @@ BakedWalk bake_walk(const Rig& rig, const WalkBakeOptions& options) {
   for (std::size_t k = 0;; ++k) {
     float dt = 0.0f;
     if (k > 0 && k <= whole_steps) {
-      dt = step;
+      dt = frame_dt;
       time = static_cast<float>(static_cast<double>(k) / options.fps);
     } else if (k > whole_steps) {
-      if (options.seconds - time <= 1e-4f * step) break;
+      if (options.seconds - time <= 1e-4f * frame_dt) break;
       dt = options.seconds - time;
       time = options.seconds;
     }
-    scene.simulate(dt, profiler);
+    step(scene, dt, profiler);
     WalkerLanes lanes = scene.lanes();
     const Placement placement = placement_of(lanes, 0);
     const float heading = lanes.placement[3 * lanes.stride];

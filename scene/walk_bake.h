@@ -1,6 +1,6 @@
 #pragma once
 // Baking the walk generator into a keyframed clip: one walker of a rig is driven by the real frame script
-// (CrowdScene with MotionSource::Walk: locomotion -> IK -> FK, systems/frame_script.h) and every joint's local
+// (Crowd with MotionSource::Walk: locomotion -> IK -> FK, systems/frame_script.h) and every joint's local
 // rotation plus the root's motion is sampled at a fixed rate. The result is an ordinary AnimationClip in H-Anim
 // terms, so anything that plays clips (the animation system, the glTF writer io/gltf_export.h) can replay it.
 //
@@ -32,7 +32,7 @@ struct BakedWalk {
   float start_heading = 0.0f;      // radians about +Y
 };
 
-// Throws std::invalid_argument when the rig cannot walk (CrowdScene::walk_unavailable), or seconds or fps are not
+// Throws std::invalid_argument when the rig cannot walk (Crowd::walk_unavailable), or seconds or fps are not
 // positive and finite, or more than 100,000 keys would be needed.
 BakedWalk bake_walk(const Rig& rig, const WalkBakeOptions& options = {});
 

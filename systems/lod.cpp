@@ -60,20 +60,32 @@ int lod_decide(const LodView& view, const LodPolicy& policy, const glm::vec3& ce
   return decide(Frustum(view.view_projection), view, policy, center, radius, height, previous, fixed_level, levels);
 }
 
-void lod_system(const LodView& view, const LodPolicy& policy, const WalkerLanes& lanes, float body_height,
-                int fixed_level, int levels) {
-  const Frustum frustum(view.view_projection);
-  for (std::size_t w = 0; w < lanes.count; ++w) {
-    const Placement P = placement_of(lanes, w);
+bool LodJob::validate() const {
+  if (view == nullptr || policy == nullptr) return false;
+  if (levels < 1 || levels > 3 || fixed_level >= levels || previous_level >= levels) return false;
+  if (!(std::isfinite(body_height) && body_height > 0.0f)) return false;
+  if (decided.size() != walkers) return false;
+  if (walkers == 0) return true;
+  return placement != nullptr && world != nullptr && stride >= walkers;
+}
+
+bool LodJob::run() const {
+  if (!validate()) return false;
+  const Frustum frustum(view->view_projection);
+  for (std::size_t w = 0; w < walkers; ++w) {
+    const float heading = placement[3 * stride + w];
+    const float scale = placement[4 * stride + w];
+    const glm::vec3 position(placement[0 * stride + w], placement[1 * stride + w], placement[2 * stride + w]);
+    const Placement P{position, std::cos(heading), std::sin(heading), scale};
     // The root's posed position (F(0)'s translation, humanoid space) placed in the world; the sphere reaches
     // the head, the feet and outstretched arms.
-    const glm::vec3 root(lanes.at(lanes.world, 9)[w], lanes.at(lanes.world, 10)[w], lanes.at(lanes.world, 11)[w]);
+    const glm::vec3 root(world[9 * stride + w], world[10 * stride + w], world[11 * stride + w]);
     const float height = body_height * P.scale;
-    const glm::vec3 center = P.point(root);
-    float& lod = lanes.at(lanes.lod, 0)[w];
-    const int previous = static_cast<int>(lod);
-    lod = static_cast<float>(decide(frustum, view, policy, center, 0.75f * height, height, previous, fixed_level, levels));
+    const int level = decide(frustum, *view, *policy, P.point(root), 0.75f * height, height, previous_level,
+                             fixed_level, levels);
+    decided[w] = level < 0 ? culled_slot : static_cast<std::uint8_t>(level);
   }
+  return true;
 }
 
 }  // namespace strata

@@ -1,13 +1,17 @@
 #pragma once
-// Level-of-detail system (frame script step, after muscle, before skin): for every walker decides whether the
+// Level-of-detail system (the frame's lod stage, after muscle, before skin): for every walker decides whether the
 // camera sees it at all (frustum culling against its bounding sphere) and, under the automatic policy, which
 // body level to skin and draw from its projected height in pixels, with hysteresis so a walker near a threshold
-// does not flicker between levels. Writes the decision into the walker's lod column (components/walker.h):
-// -1 culled, else the level. Culled walkers are neither skinned nor drawn.
+// does not flicker between levels. The decision is the table the walker is skinned from (scene/step.cpp moves
+// it there); culled walkers are neither skinned nor drawn.
 //
 // Per walker, independent of the others and of thread scheduling, so deterministic.
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
 
 #include "components/walker.h"
 
@@ -31,13 +35,36 @@ struct LodPolicy {
   float hysteresis = 1.15f;
 };
 
-inline constexpr float kLodCulled = -1.0f;
-inline constexpr float kLodUnset = -2.0f;  // a walker's first decision: no hysteresis yet
+// The level-of-detail job over one walker table (ozz-style: inputs and outputs are public members, validate()
+// then run()). The table a walker sits in is its previous decision (scene/crowd.h: DetailSlot), so one job runs
+// per table with that table's `previous_level`.
+//
+// Reads: placement (5 components: x, y, z, heading, scale) and world matrices (joint 0's translation, components
+// 9..11: the root's posed position) of `walkers` rows, `stride` apart. Writes: decided[w], the slot index the
+// walker is skinned from this frame: its mesh level 0..levels-1, or `culled_slot` when the camera does not see it.
+struct LodJob {
+  const LodView* view = nullptr;
+  const LodPolicy* policy = nullptr;
+  float body_height = 1.75f;  // the rig's rest height (m); a walker's is that times its scale
+  int previous_level = -1;    // the mesh level the table holds, or -1 (culled or never decided: no hysteresis)
+  int fixed_level = -1;       // >= 0: every visible walker gets this level (culling only); -1: the automatic policy
+  int levels = 1;             // mesh levels the body has (1..3)
+  std::uint8_t culled_slot = 4;  // the value written for a culled walker (DetailSlot::Culled)
+  std::size_t walkers = 0;
+  std::size_t stride = 0;
+  const float* placement = nullptr;
+  const float* world = nullptr;
+  std::span<std::uint8_t> decided;
 
-// `fixed_level` >= 0: every visible walker gets that level (culling only); -1: the automatic policy over levels
-// 0..levels-1. `body_height` is the rig's rest height (m); a walker's is that times its scale.
-void lod_system(const LodView& view, const LodPolicy& policy, const WalkerLanes& lanes, float body_height,
-                int fixed_level, int levels);
+  // Every pointer set for a non-empty table, stride >= walkers, decided.size() == walkers, levels in 1..3,
+  // fixed_level < levels, body_height finite and positive. No side effects.
+  bool validate() const;
+  // validate(), then decide every walker; false (writing nothing) when invalid.
+  bool run() const;
+};
+
+// `previous` of a walker that has no level to keep (culled, or never decided): its decision is the plain one.
+inline constexpr int kLodNoPrevious = -1;
 
 // The decision for one walker given its bounding sphere (world), and its previous level (kLodUnset at first).
 int lod_decide(const LodView& view, const LodPolicy& policy, const glm::vec3& center, float radius, float height,

@@ -10,7 +10,8 @@
 #include "components/body.h"
 #include "components/skeleton.h"
 #include "profiling/profiler.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
+#include "scene/body_settings.h"
 
 namespace strata {
 
@@ -37,14 +38,14 @@ glm::vec2 UiProbe::centre(const std::string& label) const {
   return 0.5f * (r[0] + r[1]);
 }
 
-std::vector<int> selectable_body_levels(const CrowdScene& scene) {
-  std::vector<int> levels;
+std::vector<DetailLevel> selectable_body_levels(const Crowd& scene) {
+  std::vector<DetailLevel> levels;
   const Body* body = scene.rig().body.get();
   if (!body || body->levels.empty()) return levels;
-  for (std::size_t l = 0; l < body->levels.size(); ++l) levels.push_back(static_cast<int>(l));
-  levels.push_back(kAutoBodyLevel);
+  for (std::size_t l = 0; l < body->levels.size(); ++l) levels.push_back(DetailLevel::mesh(static_cast<int>(l)));
+  levels.push_back(DetailLevel::automatic());
   if (body->cage)
-    for (int d = 1; d <= kMaxSubdivDepth; ++d) levels.push_back(subdiv_level(d));
+    for (int d = 1; d <= kMaxSubdivDepth; ++d) levels.push_back(DetailLevel::subdiv(d));
   return levels;
 }
 
@@ -56,15 +57,15 @@ void note(UiProbe* probe, const std::string& label) {
   probe->rects[label] = {glm::vec2(a.x, a.y), glm::vec2(b.x, b.y)};
 }
 
-std::string level_label(const CrowdScene& scene, int level) {
+std::string level_label(const Crowd& scene, DetailLevel level) {
   const Body* body = scene.rig().body.get();
-  std::string label = body_level_name(level);
-  if (level >= 0 && level < kAutoBodyLevel && body && static_cast<std::size_t>(level) < body->levels.size()) {
-    label += " (" + std::to_string(body->levels[static_cast<std::size_t>(level)].mesh.vertex_count()) + " v)";
-  } else if (level == kAutoBodyLevel) {
+  std::string label = level.name();
+  if (level.is_mesh() && body && static_cast<std::size_t>(level.index()) < body->levels.size()) {
+    label += " (" + std::to_string(body->levels[static_cast<std::size_t>(level.index())].mesh.vertex_count()) + " v)";
+  } else if (level.is_automatic()) {
     label += " (by size on screen)";
-  } else if (is_subdiv_level(level)) {
-    label += " (cage refined " + std::to_string(subdiv_depth(level)) + "x)";
+  } else if (level.is_subdiv()) {
+    label += " (cage refined " + std::to_string(level.index()) + "x)";
   }
   return label;
 }
@@ -89,7 +90,7 @@ void playback_section(ViewPanelState& s, UiProbe* probe) {
   note(probe, "skeletons");
 }
 
-void crowd_section(CrowdScene& scene, ViewPanelState& s, UiProbe* probe) {
+void crowd_section(Crowd& scene, ViewPanelState& s, UiProbe* probe) {
   ImGui::Text("%zu walkers, %zu triangles drawn", scene.walker_count(), s.triangles_drawn);
   ImGui::InputInt("walkers", &s.walkers, 1, 25);
   note(probe, "walkers");
@@ -101,25 +102,25 @@ void crowd_section(CrowdScene& scene, ViewPanelState& s, UiProbe* probe) {
   note(probe, "New crowd");
 }
 
-void level_section(CrowdScene& scene, UiProbe* probe) {
-  const std::vector<int> levels = selectable_body_levels(scene);
+void level_section(Crowd& scene, UiProbe* probe) {
+  const std::vector<DetailLevel> levels = selectable_body_levels(scene);
   if (levels.empty()) {
     ImGui::TextDisabled("no body (skeletons only)");
     return;
   }
-  const int current = scene.body_level();
+  const DetailLevel current = scene.skin.level;
   if (ImGui::BeginCombo("level", level_label(scene, current).c_str())) {
-    for (int level : levels) {
+    for (DetailLevel level : levels) {
       const bool selected = level == current;
-      if (ImGui::Selectable(level_label(scene, level).c_str(), selected) && !selected) scene.set_body_level(level);
-      note(probe, "level:" + body_level_name(level));
+      if (ImGui::Selectable(level_label(scene, level).c_str(), selected) && !selected) set_detail_level(scene, level);
+      note(probe, "level:" + level.name());
       if (selected) ImGui::SetItemDefaultFocus();
     }
     ImGui::EndCombo();
   }
   note(probe, "level");
-  LodPolicy& policy = scene.lod_policy();
-  ImGui::BeginDisabled(current != kAutoBodyLevel);
+  LodPolicy& policy = scene.lod.policy;
+  ImGui::BeginDisabled(current != DetailLevel::automatic());
   ImGui::SliderFloat("level 0 above", &policy.level0_px, 50.0f, 1000.0f, "%.0f px");
   note(probe, "level 0 above");
   ImGui::SliderFloat("level 1 above", &policy.level1_px, 20.0f, 600.0f, "%.0f px");
@@ -128,16 +129,16 @@ void level_section(CrowdScene& scene, UiProbe* probe) {
   note(probe, "hysteresis");
   policy.level1_px = std::min(policy.level1_px, policy.level0_px);
   ImGui::EndDisabled();
-  const auto counts = scene.lod_counts();
+  const auto counts = scene.lod.counts;
   ImGui::Text("skinned at 0/1/2: %zu / %zu / %zu, culled %zu", counts[0], counts[1], counts[2], counts[3]);
 }
 
-void gait_section(CrowdScene& scene, UiProbe* probe) {
-  if (scene.motion() != MotionSource::Walk) {
+void gait_section(Crowd& scene, UiProbe* probe) {
+  if (scene.motion.source != MotionSource::Walk) {
     ImGui::TextDisabled("the walkers play clips; gait applies to the walk generator");
     return;
   }
-  GaitStyle& g = scene.style();
+  GaitStyle& g = scene.motion.style;
   // Ranges: about twice each default either way, within what the IK limits can still follow.
   ImGui::SliderFloat("pelvis yaw", &g.pelvis_yaw, 0.0f, 0.2f, "%.3f rad");
   note(probe, "pelvis yaw");
@@ -155,16 +156,16 @@ void gait_section(CrowdScene& scene, UiProbe* probe) {
   note(probe, "Default gait");
 }
 
-void muscle_section(CrowdScene& scene, UiProbe* probe) {
+void muscle_section(Crowd& scene, UiProbe* probe) {
   if (!scene.has_muscles()) {
     ImGui::TextDisabled("this rig has no muscle layer");
     return;
   }
   bool on = scene.muscles_enabled();
-  if (ImGui::Checkbox("muscles on", &on)) scene.set_muscles_enabled(on);
+  if (ImGui::Checkbox("muscles on", &on)) set_muscles_enabled(scene, on);
   note(probe, "muscles on");
   const MuscleSet& set = scene.rig().muscles->set;
-  MuscleGains gains = scene.muscle_gains();
+  MuscleGains gains = scene.skin.gains;
   bool changed = false;
   changed |= ImGui::SliderFloat("all muscles", &gains.global, 0.0f, 5.0f, "%.2fx");
   note(probe, "all muscles");
@@ -177,7 +178,7 @@ void muscle_section(CrowdScene& scene, UiProbe* probe) {
   }
   note(probe, "Reset gains");
   // Only a change goes to the scene: set_muscle_gains re-derives the per-vertex coefficients.
-  if (changed) scene.set_muscle_gains(std::move(gains));
+  if (changed) set_muscle_gains(scene, std::move(gains));
 }
 
 void timing_section(const ViewPanelState& s) {
@@ -196,7 +197,7 @@ void timing_section(const ViewPanelState& s) {
   }
 }
 
-void binding_section(CrowdScene& scene, BindingEditState& b, UiProbe* probe) {
+void binding_section(Crowd& scene, BindingEditState& b, UiProbe* probe) {
   if (!scene.rig().body || scene.rig().body->levels.empty()) {
     ImGui::TextDisabled("no body to bind");
     return;
@@ -273,7 +274,7 @@ void binding_section(CrowdScene& scene, BindingEditState& b, UiProbe* probe) {
 
 }  // namespace
 
-void draw_view_panel(CrowdScene& scene, ViewPanelState& state, UiProbe* probe) {
+void draw_view_panel(Crowd& scene, ViewPanelState& state, UiProbe* probe) {
   ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
   // Auto-resized to the open tab: every tab fits a 720p window, so nothing needs scrolling, and a tab is one
   // concern (a long page of collapsing headers outgrew the screen once the muscle sliders were open).

@@ -1,7 +1,7 @@
 #pragma once
 // The control panel of `strata view` (Dear ImGui, immediate mode): crowd size, level policy, gait, muscle
 // gains, a live per-system timing chart, pause/step, screenshot. Changes that the scene can take at run time
-// (level, level-of-detail policy, gait style, muscle gains) go straight into the CrowdScene; those that need the
+// (level, level-of-detail policy, gait style, muscle gains) go straight into the Crowd; those that need the
 // app (a new crowd, a screenshot, stepping, the camera) are requests in ViewPanelState, which the app clears once
 // handled.
 #include <array>
@@ -13,9 +13,11 @@
 
 #include <glm/vec2.hpp>
 
+#include "components/detail_level.h"
+
 namespace strata {
 
-class CrowdScene;
+class Crowd;
 class Profiler;
 
 // The last `capacity` frames of every profiled system's time (ms), for the chart. Fed once per frame after
@@ -91,10 +93,10 @@ struct ViewPanelState {
 
 // Draws the panel for this frame (between ImGuiLayer::begin_frame and render). `probe`, when given, records
 // the widgets' rectangles.
-void draw_view_panel(CrowdScene& scene, ViewPanelState& state, UiProbe* probe = nullptr);
+void draw_view_panel(Crowd& scene, ViewPanelState& state, UiProbe* probe = nullptr);
 
 // The body levels a scene can show, in the order the panel and the L key cycle them: its meshes, auto, and
 // S1..S3 when the body has a subdivision cage. Empty without a body.
-std::vector<int> selectable_body_levels(const CrowdScene& scene);
+std::vector<DetailLevel> selectable_body_levels(const Crowd& scene);
 
 }  // namespace strata

@@ -7,6 +7,8 @@
 #include "components/body.h"
 #include "profiling/profiler.h"
 #include "rig/binding_editor.h"
+#include "scene/body_settings.h"
+#include "scene/step.h"
 
 namespace strata {
 
@@ -29,8 +31,8 @@ bool ViewSession::apply_crowd_request() {
   next.rest = panel_.binding.rest_pose;
   next.walkers = static_cast<std::size_t>(std::max(panel_.walkers, 1));
   next.seed = static_cast<std::uint64_t>(std::max(panel_.seed, 0));
-  next.level = scene_->body_level();
-  std::unique_ptr<CrowdScene> built;
+  next.level = scene_->skin.level;
+  std::unique_ptr<Crowd> built;
   try {
     built = build_scene(next);
   } catch (const std::exception& e) {
@@ -41,13 +43,13 @@ bool ViewSession::apply_crowd_request() {
     return false;
   }
   // What the user tuned at run time survives a new crowd; the crowd itself (count, seed) is what changes.
-  built->lod_policy() = scene_->lod_policy();
-  built->style() = scene_->style();
+  built->lod.policy = scene_->lod.policy;
+  built->motion.style = scene_->motion.style;
   if (built->has_muscles()) {
-    built->set_muscles_enabled(scene_->muscles_enabled());
-    built->set_muscle_gains(scene_->muscle_gains());
+    set_muscles_enabled(*built, scene_->muscles_enabled());
+    set_muscle_gains(*built, scene_->skin.gains);
   }
-  if (edited_body_) built->set_body(edited_body_);  // the edits belong to the body, not to the crowd
+  if (edited_body_) set_body(*built, edited_body_);  // the edits belong to the body, not to the crowd
   scene_ = std::move(built);
   fresh_ = true;
   if (was_editing) start_editing();
@@ -60,16 +62,16 @@ bool ViewSession::apply_crowd_request() {
 float ViewSession::advance(float real_dt, Profiler& profiler) {
   if (!panel_.paused) {
     const float dt = std::max(real_dt, 0.0f) * std::clamp(panel_.time_scale, 0.0f, 10.0f);
-    scene_->simulate(dt, profiler);
+    step(*scene_, dt, profiler);
     fresh_ = false;
     return dt;
   }
   const int steps = std::max(panel_.step_requests, 0);
   panel_.step_requests = 0;
   constexpr float kStep = 1.0f / 30.0f;
-  if (steps == 0 && fresh_) scene_->simulate(0.0f, profiler);
+  if (steps == 0 && fresh_) step(*scene_, 0.0f, profiler);
   fresh_ = false;
-  for (int s = 0; s < steps; ++s) scene_->simulate(kStep, profiler);
+  for (int s = 0; s < steps; ++s) step(*scene_, kStep, profiler);
   return static_cast<float>(steps) * kStep;
 }
 
@@ -100,9 +102,9 @@ bool ray_hits_box(const PickRay& ray, const glm::vec3& lo, const glm::vec3& hi) 
   return true;
 }
 
-bool is_mesh_level(const CrowdScene& scene, int level) {
+bool is_mesh_level(const Crowd& scene, DetailLevel level) {
   const Body* body = scene.rig().body.get();
-  return body && level >= 0 && level < kAutoBodyLevel && static_cast<std::size_t>(level) < body->levels.size();
+  return body && level.is_mesh() && static_cast<std::size_t>(level.index()) < body->levels.size();
 }
 
 }  // namespace
@@ -113,15 +115,15 @@ const BindingTables& ViewSession::binding_tables() const {
 }
 
 void ViewSession::start_editing() {
-  CrowdScene& scene = *scene_;
+  Crowd& scene = *scene_;
   BindingEditState& b = panel_.binding;
   if (!scene.rig().body || scene.rig().body->levels.empty()) {
     b.active = false;
     panel_.last_message = "binding editor: this scene has no body";
     return;
   }
-  if (!is_mesh_level(scene, scene.body_level())) {
-    scene.set_body_level(0);  // weights belong to one mesh; auto and S levels mix or refine meshes
+  if (!is_mesh_level(scene, scene.skin.level)) {
+    set_detail_level(scene, DetailLevel::mesh(0));  // weights belong to one mesh; auto and S levels mix or refine meshes
     fresh_ = true;
   }
   if (!have_tables_) {
@@ -132,7 +134,7 @@ void ViewSession::start_editing() {
                   : load_binding_overrides_file(options_.binding_overrides, default_binding_tables());
     have_tables_ = true;
   }
-  const int level = scene.body_level();
+  const int level = scene.skin.level.index();
   const BodyLevel& body_level = scene.rig().body->levels[static_cast<std::size_t>(level)];
   editor_ = std::make_unique<BindingEditor>(body_level.mesh, scene.rig().skeleton, body_level.binding, tables_);
   b.active = true;
@@ -159,7 +161,7 @@ void ViewSession::stop_editing() {
 void ViewSession::publish_edit(const char* what) {
   const int level = panel_.binding.level;
   edited_body_ = with_level_binding(*scene_->rig().body, level, editor_->binding());
-  scene_->set_body(edited_body_);
+  set_body(*scene_, edited_body_);
   fresh_ = true;
   panel_.last_message = std::string(what) + ": level " + std::to_string(level) + ", " +
                         std::to_string(editor_->edit_count()) + " edits this level";
@@ -170,10 +172,10 @@ void ViewSession::apply_binding_requests() {
   if (b.activate_requested && !editor_) start_editing();
   if (b.deactivate_requested && editor_) stop_editing();
   b.activate_requested = b.deactivate_requested = false;
-  if (editor_ && scene_->body_level() != b.level) {
+  if (editor_ && scene_->skin.level != DetailLevel::mesh(b.level)) {
     // The user picked another level: keep what was done and edit that level's mesh, or stop at auto/S levels.
     stop_editing();
-    if (is_mesh_level(*scene_, scene_->body_level())) start_editing();
+    if (is_mesh_level(*scene_, scene_->skin.level)) start_editing();
     else panel_.last_message = "binding editor stopped: pick level 0, 1 or 2 to edit weights";
   }
   if (!editor_) {
@@ -208,11 +210,11 @@ void ViewSession::apply_binding_requests() {
   b.edits = editor_->edit_count();
 }
 
-std::size_t ViewSession::block_count() const { return scene_->skinned().vertex_count ? scene_->skinned().walkers : 0; }
+std::size_t ViewSession::block_count() const { return current_skinned(*scene_).vertex_count ? current_skinned(*scene_).walkers : 0; }
 
 void ViewSession::block_positions(std::size_t block, std::vector<glm::vec3>& out) const {
-  const SkinnedCrowd& s = scene_->skinned();
-  const std::vector<std::uint32_t>& original = scene_->skin_layout().original;
+  const SkinnedCrowd& s = current_skinned(*scene_);
+  const std::vector<std::uint32_t>& original = current_layout(*scene_).original;
   out.resize(original.size());
   for (std::size_t i = 0; i < original.size(); ++i) out[original[i]] = s.position(block, i);
 }
@@ -222,7 +224,7 @@ void ViewSession::binding_mouse(const EditorMouse& m, const glm::mat4& view_proj
   b.cursor = m.cursor;
   // A minimised window has an empty framebuffer: nothing to pick on (and pick_ray would refuse it).
   if (viewport.x <= 0 || viewport.y <= 0) return;
-  if (!editor_ || block_count() == 0 || scene_->skin_layout().original.empty()) return;
+  if (!editor_ || block_count() == 0 || current_layout(*scene_).original.empty()) return;
   const Mesh& mesh = scene_->rig().body->levels[static_cast<std::size_t>(b.level)].mesh;
   const SelectOp op = m.shift ? SelectOp::Add : m.ctrl ? SelectOp::Subtract : SelectOp::Replace;
   VertexSelection& selection = editor_->selection();
@@ -234,7 +236,7 @@ void ViewSession::binding_mouse(const EditorMouse& m, const glm::mat4& view_proj
     float best = std::numeric_limits<float>::max(), best_screen = best;
     long hit_block = -1, near_block = -1;
     std::optional<std::uint32_t> hit_vertex;
-    const SkinnedCrowd& skinned = scene_->skinned();
+    const SkinnedCrowd& skinned = current_skinned(*scene_);
     for (std::size_t k = 0; k < block_count(); ++k) {
       // The block's bounds straight from the SoA output: cheap, and a ray that misses them skips the block's
       // triangles (a click over a crowd of 1,000 would otherwise test every triangle of every walker).
@@ -287,9 +289,9 @@ void ViewSession::binding_mouse(const EditorMouse& m, const glm::mat4& view_proj
 }
 
 void ViewSession::colour_draws(std::vector<BodyDrawInput>& draws) {
-  if (!editor_ || draws.size() != 1 || scene_->skin_layout().original.empty()) return;
+  if (!editor_ || draws.size() != 1 || current_layout(*scene_).original.empty()) return;
   const BindingEditState& b = panel_.binding;
-  const std::vector<std::uint32_t>& original = scene_->skin_layout().original;
+  const std::vector<std::uint32_t>& original = current_layout(*scene_).original;
   std::vector<std::uint32_t> mesh_colours(editor_->binding().vertex_count());
   editor_->weight_colors(b.joint, true, mesh_colours);
   if (!b.show_weights)  // selection only: everything else plain skin

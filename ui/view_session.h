@@ -34,8 +34,8 @@ class ViewSession {
   ViewSession(const ViewSession&) = delete;
   ViewSession& operator=(const ViewSession&) = delete;
 
-  CrowdScene& scene() { return *scene_; }
-  const CrowdScene& scene() const { return *scene_; }
+  Crowd& scene() { return *scene_; }
+  const Crowd& scene() const { return *scene_; }
   ViewPanelState& panel() { return panel_; }
   const SceneOptions& options() const { return options_; }
 
@@ -53,7 +53,7 @@ class ViewSession {
   // ---- The binding editor (the paper's manual step 3; panel state in panel().binding) ----
   // Acts on the Binding tab's requests: start/stop editing (a mesh level is forced; the crowd pauses), bind the
   // selection to the chosen joint and its parent, undo, clear, save the overrides file, rest pose on/off.
-  // Edits take effect on the crowd at once (CrowdScene::set_body) and survive a new crowd.
+  // Edits take effect on the crowd at once (Crowd::set_body) and survive a new crowd.
   void apply_binding_requests();
   // While editing: the current tool on the walker under the cursor when the button went down. Click picks one
   // vertex (Shift adds, Ctrl removes); Box selects what the rectangle covers on release; Brush paints while held.
@@ -75,7 +75,7 @@ class ViewSession {
 
 
   SceneOptions options_;
-  std::unique_ptr<CrowdScene> scene_;
+  std::unique_ptr<Crowd> scene_;
   ViewPanelState panel_;
   bool fresh_ = true;  // no simulate() since the scene was built
 

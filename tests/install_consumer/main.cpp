@@ -5,12 +5,12 @@
 #include <strata/scene/crowd_scene.h>
 
 int main() {
-  strata::CrowdScene scene(strata::to_rig(strata::load_default_humanoid()));
+  strata::Crowd scene(strata::to_rig(strata::load_default_humanoid()));
   strata::CrowdConfig config;
   config.walkers = 4;
-  scene.spawn_crowd(config);
+  spawn_crowd(scene, config);
   strata::Profiler profiler;
-  scene.simulate(1.0f / 30.0f, profiler);
+  step(scene, 1.0f / 30.0f, profiler);
   const std::size_t joints = scene.rig().skeleton.joint_count();
   std::printf("consumer: %zu joints, %zu walkers, %zu systems timed\n", joints, scene.walker_count(),
               profiler.stats().size());

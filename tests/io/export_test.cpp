@@ -29,7 +29,10 @@
 #include "profiling/profiler.h"
 #include "rig/body_rig.h"
 #include "systems/animation_sample.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -113,28 +116,28 @@ Glb read_glb(const fs::path& path) {
 // The engine's own walker, as bake_walk drives it, `steps` frames of 1/30 s after the start state; muscles off
 // (the default shipped rig here has none attached), skinned at `level`.
 struct EngineWalker {
-  std::unique_ptr<CrowdScene> scene;
+  std::unique_ptr<Crowd> scene;
   glm::vec3 start_position{0.0f};
   float start_heading = 0.0f;
 };
 
 EngineWalker engine_walker(int level, std::uint64_t seed, int steps) {
   EngineWalker w;
-  w.scene = std::make_unique<CrowdScene>(shipped_rig());
+  w.scene = std::make_unique<Crowd>(shipped_rig());
   CrowdConfig config;
   config.motion = MotionSource::Walk;
   config.walkers = 1;
   config.seed = seed;
-  config.height_mean = w.scene->locomotion_rig()->rig_height;
+  config.height_mean = w.scene->motion.locomotion.get()->rig_height;
   config.height_spread = 0.0f;
-  w.scene->spawn_crowd(config);
-  w.scene->set_body_level(level);
+  spawn_crowd(*w.scene, config);
+  set_detail_level(*w.scene, DetailLevel::mesh(level));
   Profiler profiler(1, false);
-  w.scene->simulate(0.0f, profiler);
+  step(*w.scene, 0.0f, profiler);
   const WalkerLanes lanes = w.scene->lanes();
   w.start_position = placement_of(lanes, 0).position;
   w.start_heading = lanes.placement[3 * lanes.stride];
-  for (int i = 0; i < steps; ++i) w.scene->simulate(1.0f / 30.0f, profiler);
+  for (int i = 0; i < steps; ++i) step(*w.scene, 1.0f / 30.0f, profiler);
   return w;
 }
 
@@ -275,11 +278,11 @@ TEST(ExportPose, ImportedClipMatchesTheEngineWalkerAtHalfASecond) {
   back.skeleton = imported.skeleton;
   back.clips = imported.clips;
   back.body = std::make_shared<const Body>(Body{{BodyLevel{imported.mesh, imported.skin}}});
-  CrowdScene replay(std::move(back));
-  replay.spawn(glm::vec3(0.0f), 0.0f, 0.5f, 1.0f, 0);
-  replay.set_body_level(0);
+  Crowd replay(std::move(back));
+  spawn_clip_walker(replay, glm::vec3(0.0f), 0.0f, 0.5f, 1.0f, 0);
+  set_detail_level(replay, DetailLevel::mesh(0));
   Profiler profiler(1, false);
-  replay.simulate(0.0f, profiler);
+  step(replay, 0.0f, profiler);
 
   const EngineWalker engine = engine_walker(kLevel, 3, 15);
   EXPECT_LT(glm::length(engine.start_position - walk.start_position), 1e-6f);
@@ -302,13 +305,13 @@ TEST(ExportPose, ImportedClipMatchesTheEngineWalkerAtHalfASecond) {
   EXPECT_GT(moved, 0.3) << "half a second of walking moves the joints well away from the rest pose";
 
   // Skinned vertices, both in mesh order (each scene's layout maps back to the mesh vertex).
-  const SkinnedCrowd& sa = replay.skinned();
-  const SkinnedCrowd& sb = engine.scene->skinned();
+  const SkinnedCrowd& sa = current_skinned(replay);
+  const SkinnedCrowd& sb = current_skinned(*engine.scene);
   ASSERT_EQ(sa.vertex_count, sb.vertex_count);
   std::vector<glm::vec3> va(sa.vertex_count), vb(sb.vertex_count);
-  for (std::size_t i = 0; i < sa.vertex_count; ++i) va[replay.skin_layout().original[i]] = sa.position(0, i);
+  for (std::size_t i = 0; i < sa.vertex_count; ++i) va[current_layout(replay).original[i]] = sa.position(0, i);
   for (std::size_t i = 0; i < sb.vertex_count; ++i)
-    vb[engine.scene->skin_layout().original[i]] = relative_to_start(engine, sb.position(0, i));
+    vb[current_layout(*engine.scene).original[i]] = relative_to_start(engine, sb.position(0, i));
   double worst_vertex = 0.0;
   for (std::size_t v = 0; v < va.size(); ++v) worst_vertex = std::max(worst_vertex, double(glm::length(va[v] - vb[v])));
   EXPECT_LT(worst_vertex, 1e-5) << "skinned vertex positions, m";

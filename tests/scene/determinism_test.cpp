@@ -11,8 +11,11 @@
 #include "io/hanim_loader.h"
 #include "rig/body_rig.h"
 #include "rig/muscle_binding.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/skin_kernel.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -28,7 +31,7 @@ constexpr std::uint64_t kGoldenSkinHash = 0x0c2c59249dee4961ull;
 
 constexpr int kFrames = 200;
 constexpr std::size_t kWalkers = 8;
-constexpr int kLevel = 2;
+constexpr DetailLevel kLevel = DetailLevel::mesh(2);
 constexpr double kQuantum = 1e-5;  // metres
 
 std::uint64_t fnv1a(std::uint64_t h, std::int64_t value) {
@@ -44,15 +47,15 @@ std::uint64_t crowd_skin_hash(int threads) {
   Rig rig = to_rig(load_default_humanoid());
   rig.body = default_bound_body();
   rig.muscles = default_muscle_rig();  // the default crowd has its muscle layer
-  CrowdScene scene(rig);
+  Crowd scene(rig);
   CrowdConfig config;  // the default walking crowd, fewer walkers
   config.walkers = kWalkers;
   config.motion = MotionSource::Walk;
-  scene.spawn_crowd(config);
-  scene.set_body_level(kLevel);
+  spawn_crowd(scene, config);
+  set_detail_level(scene, kLevel);
   Profiler profiler(8, false);
-  for (int f = 0; f < kFrames; ++f) scene.simulate(1.0f / 30.0f, profiler);
-  const SkinnedCrowd& s = scene.skinned();
+  for (int f = 0; f < kFrames; ++f) step(scene, 1.0f / 30.0f, profiler);
+  const SkinnedCrowd& s = current_skinned(scene);
   EXPECT_EQ(s.walkers, kWalkers);
   EXPECT_GT(s.vertex_count, 1000u);
   std::uint64_t h = 0xcbf29ce484222325ull;

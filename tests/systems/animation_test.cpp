@@ -6,7 +6,9 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "systems/animation_sample.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -84,12 +86,12 @@ TEST(AnimationSystem, AdvancesEachWalkerByItsRate) {
   rig.skeleton.limits.resize(3);
   rig.skeleton.stiffness.assign(3, glm::vec3(1.0f));
   rig.clips.push_back(swing_clip());
-  CrowdScene scene(rig);
-  scene.spawn({0, 0, 0}, 0.0f, 0.0f, 1.0f, 0);
-  scene.spawn({1, 0, 0}, 0.0f, 0.0f, 0.5f, 0);
-  scene.spawn({2, 0, 0}, 0.0f, 0.0f, 1.0f, -1);
+  Crowd scene(rig);
+  spawn_clip_walker(scene, {0, 0, 0}, 0.0f, 0.0f, 1.0f, 0);
+  spawn_clip_walker(scene, {1, 0, 0}, 0.0f, 0.0f, 0.5f, 0);
+  spawn_clip_walker(scene, {2, 0, 0}, 0.0f, 0.0f, 1.0f, -1);
   Profiler profiler;
-  for (int f = 0; f < 15; ++f) scene.simulate(0.1f, profiler);  // 1.5 s
+  for (int f = 0; f < 15; ++f) step(scene, 0.1f, profiler);  // 1.5 s
   WalkerLanes lanes = scene.lanes();
   auto joint1_angle = [&](std::size_t w) {
     glm::quat q(lanes.local_rotation[(1 * 4 + 3) * lanes.stride + w], lanes.local_rotation[(1 * 4 + 0) * lanes.stride + w],
@@ -121,10 +123,10 @@ TEST(AnimationSystem, AllClipsLayerEachOnItsOwnCycle) {
   r.values = {glm::angleAxis(0.0f, glm::vec3(1, 0, 0)), glm::angleAxis(1.0f, glm::vec3(1, 0, 0))};
   other.rotations.push_back(r);
   rig.clips.push_back(other);
-  CrowdScene scene(rig);
-  scene.spawn({0, 0, 0}, 0.0f, 0.0f, 1.0f, kAllClips);
+  Crowd scene(rig);
+  spawn_clip_walker(scene, {0, 0, 0}, 0.0f, 0.0f, 1.0f, kAllClips);
   Profiler profiler;
-  for (int f = 0; f < 7; ++f) scene.simulate(0.1f, profiler);  // 0.7 s: clip 0 at 0.7 s, clip 1 at 0.2 s
+  for (int f = 0; f < 7; ++f) step(scene, 0.1f, profiler);  // 0.7 s: clip 0 at 0.7 s, clip 1 at 0.2 s
   WalkerLanes lanes = scene.lanes();
   auto angle = [&](std::size_t j) {
     glm::quat q(lanes.local_rotation[(j * 4 + 3) * lanes.stride], lanes.local_rotation[(j * 4 + 0) * lanes.stride],

@@ -15,10 +15,13 @@
 #include "rig/muscle_binding.h"
 #include "systems/fk.h"
 #include "systems/muscle.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/ik.h"
 #include "systems/skin_kernel.h"
 #include "reference/skin_reference.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -106,19 +109,19 @@ TEST(FiniteOutputs, SkinningOnTenThousandExtremePoses) {
   Rig rig = to_rig(load_default_humanoid());
   rig.body = default_bound_body();
   rig.muscles = default_muscle_rig();
-  CrowdScene scene(rig);
+  Crowd scene(rig);
   CrowdConfig config;
   config.walkers = 4;
   config.motion = MotionSource::Walk;
-  scene.spawn_crowd(config);
-  scene.set_body_level(2);  // the coarsest level: the property is per vertex, the count only costs time
+  spawn_crowd(scene, config);
+  set_detail_level(scene, DetailLevel::mesh(2));  // the coarsest level: the property is per vertex, the count only costs time
   const BodyLevel& body = rig.body->levels[2];
-  const SkinLayout& layout = scene.skin_layout();
+  const SkinLayout& layout = current_layout(scene);
   const std::size_t padded = pad_to_lanes(layout.vertex_count);
   std::vector<float> out(6 * padded);
   const SkinOutput soa = skin_output_in(out.data(), padded);
   Profiler profiler(8, false);
-  scene.simulate(1.0f / 30.0f, profiler);
+  step(scene, 1.0f / 30.0f, profiler);
   WalkerLanes lanes = scene.lanes();
   Extremes x;
   const std::size_t s = lanes.stride;
@@ -152,7 +155,7 @@ TEST(FiniteOutputs, SkinningOnTenThousandExtremePoses) {
     // The scalar twin on every tenth pose (it is ~20x slower and the same property).
     if (trial % 10 == 0) {
       const std::vector<float> force = walker_muscle_forces(lanes, w);
-      const MuscleReference muscles{&rig.muscles->set, &rig.muscles->levels[2], scene.muscle_gains(), force};
+      const MuscleReference muscles{&rig.muscles->set, &rig.muscles->levels[2], scene.skin.gains, force};
       const SkinnedVertices ref = skin_reference(body.mesh, body.binding, walker_skinning_matrices(lanes, w), muscles);
       for (std::size_t v = 0; v < ref.positions.size(); ++v)
         ASSERT_TRUE(finite(ref.positions[v]) && finite(ref.normals[v])) << "reference, trial " << trial << ", vertex " << v;

@@ -12,7 +12,10 @@
 #include "io/hanim_loader.h"
 #include "systems/fk.h"
 #include "reference/fk_reference.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
+#include "scene/state_hash.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -67,14 +70,14 @@ TEST(Fk, RestPoseGivesIdentitySkinningMatrices) {
   Rig rig;
   rig.skeleton = load_default_humanoid().skeleton;
   ASSERT_EQ(rig.skeleton.joint_count(), 25u);
-  CrowdScene scene(rig);
+  Crowd scene(rig);
   CrowdConfig config;
   config.motion = MotionSource::Clip;
   config.walkers = 20;
   config.clip = -1;
-  scene.spawn_crowd(config);
+  spawn_crowd(scene, config);
   Profiler profiler;
-  scene.simulate(1.0f / 30.0f, profiler);
+  step(scene, 1.0f / 30.0f, profiler);
   WalkerLanes lanes = scene.lanes();
   for (std::size_t w = 0; w < lanes.count; ++w)
     for (std::size_t j = 0; j < lanes.joints; ++j) {
@@ -193,15 +196,15 @@ TEST(Fk, OutputIsIdenticalForOneAndTwoThreads) {
   std::uint64_t hashes[2];
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    CrowdScene scene(rig);
+    Crowd scene(rig);
     CrowdConfig config;
     config.walkers = 1500;  // several 256-walker chunks, so the parallel path really splits
     config.motion = MotionSource::Clip;
     config.clip = rig.clips.empty() ? -1 : 0;
-    scene.spawn_crowd(config);
+    spawn_crowd(scene, config);
     Profiler profiler;
-    for (int f = 0; f < 5; ++f) scene.simulate(1.0f / 30.0f, profiler);
-    hashes[threads - 1] = scene.state_hash();
+    for (int f = 0; f < 5; ++f) step(scene, 1.0f / 30.0f, profiler);
+    hashes[threads - 1] = state_hash(scene);
   }
   EXPECT_EQ(hashes[0], hashes[1]);
 }

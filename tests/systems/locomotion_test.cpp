@@ -9,31 +9,37 @@
 #include "io/hanim_loader.h"
 #include "motion/gait.h"
 #include "motion/track.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/gait_metrics.h"
 #include "systems/pose_gather.h"
+#include "scene/state_hash.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
 
-CrowdScene make_walkers(std::size_t n, std::uint64_t seed = 1) {
-  CrowdScene scene(to_rig(load_default_humanoid()));
+std::unique_ptr<Crowd> make_walkers(std::size_t n, std::uint64_t seed = 1) {
+  auto crowd = std::make_unique<Crowd>(to_rig(load_default_humanoid()));
+  Crowd& scene = *crowd;
   CrowdConfig config;
   config.motion = MotionSource::Walk;
   config.walkers = n;
   config.seed = seed;
-  scene.spawn_crowd(config);
-  return scene;
+  spawn_crowd(scene, config);
+  return crowd;
 }
 
 TEST(Locomotion, CrowdMeetsTheGaitTargets) {
-  CrowdScene scene = make_walkers(9);
-  GaitMetrics metrics(scene.rig().skeleton, *scene.locomotion_rig(), scene.style());
+  std::unique_ptr<Crowd> crowd = make_walkers(9);
+  Crowd& scene = *crowd;
+  GaitMetrics metrics(scene.rig().skeleton, *scene.motion.locomotion.get(), scene.motion.style);
   Profiler profiler(120, false);
   const float dt = 1.0f / 60.0f;
   for (int f = 0; f < 600; ++f) {
-    scene.simulate(dt, profiler);
-    metrics.observe(scene.lanes(), scene.paths(), dt);
+    step(scene, dt, profiler);
+    metrics.observe(scene.lanes(), scene.motion.paths, dt);
   }
   const GaitReport r = metrics.report();
   EXPECT_EQ(r.walkers, 9u);
@@ -49,13 +55,14 @@ TEST(Locomotion, CrowdMeetsTheGaitTargets) {
 }
 
 TEST(Locomotion, WalkerStaysOnItsPathAndFacesAlongIt) {
-  CrowdScene scene = make_walkers(4);
+  std::unique_ptr<Crowd> crowd = make_walkers(4);
+  Crowd& scene = *crowd;
   Profiler profiler(120, false);
   for (int f = 0; f < 200; ++f) {
-    scene.simulate(1.0f / 30.0f, profiler);
+    step(scene, 1.0f / 30.0f, profiler);
     WalkerLanes l = scene.lanes();
     for (std::size_t w = 0; w < l.count; ++w) {
-      const CardinalSpline& path = scene.paths()[static_cast<std::size_t>(l.gait[kGaitPath * l.stride + w])];
+      const CardinalSpline& path = scene.motion.paths[static_cast<std::size_t>(l.gait[kGaitPath * l.stride + w])];
       const float s = l.gait[kGaitDistance * l.stride + w];
       const glm::vec3 on_path = path.point_at_length(s);
       const glm::vec3 placed{l.placement[0 * l.stride + w], 0.0f, l.placement[2 * l.stride + w]};
@@ -77,18 +84,18 @@ struct Smoothness {
 };
 
 Smoothness walk_with_cadences(float c0, float c1, float c2) {
-  CrowdScene scene(to_rig(load_default_humanoid()));
-  scene.set_paths(make_stadium_lanes(glm::vec3(0.0f), 20.0f, 4.0f, 1, 1.0f));
-  scene.set_motion(MotionSource::Walk);
-  scene.spawn_walker(0, 0.0f, 0.3f, 1.75f, c0, 0.0f, 0.0f, 0.0f);
+  Crowd scene(to_rig(load_default_humanoid()));
+  set_paths(scene, make_stadium_lanes(glm::vec3(0.0f), 20.0f, 4.0f, 1, 1.0f));
+  scene.motion.source = (MotionSource::Walk);
+  spawn_walker(scene, 0, 0.0f, 0.3f, 1.75f, c0, 0.0f, 0.0f, 0.0f);
   Profiler profiler(120, false);
   std::vector<glm::vec3> prev, now;
   float prev_root = 0.0f, prev_step = 0.0f;
   Smoothness out;
   for (int f = 0; f < 720; ++f) {
-    if (f == 150) scene.walkers().f32(kWalkerGait, kGaitCadenceTarget)[0] = c1;
-    if (f == 400) scene.walkers().f32(kWalkerGait, kGaitCadenceTarget)[0] = c2;
-    scene.simulate(1.0f / 60.0f, profiler);
+    if (f == 150) scene.table(initial_slot(scene)).f32(kWalkerGait, kGaitCadenceTarget)[0] = c1;
+    if (f == 400) scene.table(initial_slot(scene)).f32(kWalkerGait, kGaitCadenceTarget)[0] = c2;
+    step(scene, 1.0f / 60.0f, profiler);
     WalkerLanes l = scene.lanes();
     gather_joint_positions(l, now);
     const float root = l.root_translation[l.stride];
@@ -101,7 +108,7 @@ Smoothness walk_with_cadences(float c0, float c1, float c2) {
     prev_root = root;
     prev_step = step;
   }
-  out.final_cadence = scene.walkers().f32(kWalkerGait, kGaitCadence)[0];
+  out.final_cadence = scene.table(initial_slot(scene)).f32(kWalkerGait, kGaitCadence)[0];
   return out;
 }
 
@@ -120,9 +127,10 @@ TEST(Locomotion, CadenceChangesWithoutPop) {
 }
 
 TEST(Locomotion, CrowdIsVariedAndLanesKeepTheirSpacing) {
-  CrowdScene scene = make_walkers(16, 5);
+  std::unique_ptr<Crowd> crowd = make_walkers(16, 5);
+  Crowd& scene = *crowd;
   Profiler profiler(120, false);
-  for (int f = 0; f < 30; ++f) scene.simulate(1.0f / 30.0f, profiler);
+  for (int f = 0; f < 30; ++f) step(scene, 1.0f / 30.0f, profiler);
   WalkerLanes l = scene.lanes();
   std::vector<float> heights, cadences;
   for (std::size_t w = 0; w < l.count; ++w) {
@@ -148,13 +156,14 @@ TEST(Locomotion, CrowdIsVariedAndLanesKeepTheirSpacing) {
 }
 
 TEST(Locomotion, ArmsSwingInAntiPhaseWithTheLegs) {
-  CrowdScene scene = make_walkers(1);
+  std::unique_ptr<Crowd> crowd = make_walkers(1);
+  Crowd& scene = *crowd;
   Profiler profiler(120, false);
   const int lw = scene.rig().skeleton.find_joint("l_wrist"), la = scene.rig().skeleton.find_joint("l_ankle");
   double sum_ww = 0, sum_aa = 0, sum_wa = 0, mw = 0, ma = 0;
   std::vector<std::pair<float, float>> samples;
   for (int f = 0; f < 240; ++f) {
-    scene.simulate(1.0f / 60.0f, profiler);
+    step(scene, 1.0f / 60.0f, profiler);
     WalkerLanes l = scene.lanes();
     samples.push_back({l.world[(lw * kAffineFloats + 11) * l.stride], l.world[(la * kAffineFloats + 11) * l.stride]});
   }
@@ -170,10 +179,11 @@ TEST(Locomotion, SameResultForOneAndTwoThreads) {
   std::uint64_t hashes[2];
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    CrowdScene scene = make_walkers(150, 3);  // several 64-walker chunks
+    std::unique_ptr<Crowd> crowd = make_walkers(150, 3);
+  Crowd& scene = *crowd;  // several 64-walker chunks
     Profiler profiler(120, false);
-    for (int f = 0; f < 40; ++f) scene.simulate(1.0f / 30.0f, profiler);
-    hashes[threads - 1] = scene.state_hash();
+    for (int f = 0; f < 40; ++f) step(scene, 1.0f / 30.0f, profiler);
+    hashes[threads - 1] = state_hash(scene);
   }
   EXPECT_EQ(hashes[0], hashes[1]);
 }
@@ -187,11 +197,11 @@ TEST(Locomotion, RigWithoutLegsCannotWalkAndSaysWhy) {
   rig.skeleton.centers = {{0, 1, 0}, {0, 1.1f, 0}};
   rig.skeleton.limits.resize(2);
   rig.skeleton.stiffness.assign(2, glm::vec3(1.0f));
-  CrowdScene scene(rig);
-  EXPECT_NE(scene.walk_unavailable().find("l_hip"), std::string::npos) << scene.walk_unavailable();
+  Crowd scene(rig);
+  EXPECT_NE(scene.motion.walk_error.find("l_hip"), std::string::npos) << scene.motion.walk_error;
   CrowdConfig config;
   config.motion = MotionSource::Walk;
-  EXPECT_THROW(scene.spawn_crowd(config), std::invalid_argument);
+  EXPECT_THROW(spawn_crowd(scene, config), std::invalid_argument);
 }
 
 }  // namespace

@@ -18,11 +18,14 @@
 #include "rig/muscle_binding.h"
 #include "systems/animation_sample.h"
 #include "systems/fk.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/muscle.h"
 #include "systems/skin.h"
 #include "systems/skin_kernel.h"
 #include "systems/subdiv.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -210,16 +213,16 @@ TEST(MuscleBinding, SharesFollowTheAngleToTheForceVector) {
 
 // One walker of the default rig, arm posed by hand, run through fk -> muscle -> skin.
 struct Posed {
-  CrowdScene scene{default_rig()};
+  Crowd scene{default_rig()};
   SkinnedCrowd out;
-  Posed(int level = 0) {
+  explicit Posed(DetailLevel level = DetailLevel::mesh(0)) {
     CrowdConfig config;
     config.walkers = 1;
     config.motion = MotionSource::Clip;
     config.clip = kRestPose;
     config.heading_jitter = 0.0f;
-    scene.spawn_crowd(config);
-    scene.set_body_level(level);
+    spawn_crowd(scene, config);
+    set_detail_level(scene, level);
   }
   void pose(float shoulder_deg, float elbow_deg) {
     const WalkerLanes l = scene.lanes();
@@ -236,7 +239,7 @@ struct Posed {
     const WalkerLanes l = scene.lanes();
     fk_system(scene.rig().skeleton, l);
     muscle_system(scene.rig().muscles->set, l);
-    skin_system(scene.skin_layout(), l, out);
+    skin_system(current_layout(scene), l, out);
     return out;
   }
   float force(const char* muscle) {
@@ -248,19 +251,19 @@ struct Posed {
 
 TEST(MuscleSystem, RestPoseGivesZeroForceAndZeroDisplacementOnEveryLevel) {
   for (int level = 0; level < 3; ++level) {
-    Posed p(level);
+    Posed p(DetailLevel::mesh(level));
     p.pose(0.0f, 0.0f);
     const SkinnedCrowd with = p.run();
     const WalkerLanes l = p.scene.lanes();
     for (std::size_t k = 0; k < l.muscle_points; ++k) ASSERT_EQ(l.at(l.muscle_force, k)[0], 0.0f);
-    p.scene.set_muscles_enabled(false);
+    set_muscles_enabled(p.scene, false);
     const SkinnedCrowd without = p.run();
     // Different layouts (muscle groups are split out), so compare through mesh vertex order.
     std::vector<glm::vec3> a(with.vertex_count), b(with.vertex_count);
-    p.scene.set_muscles_enabled(true);
-    for (std::size_t i = 0; i < with.vertex_count; ++i) a[p.scene.skin_layout().original[i]] = with.position(0, i);
-    p.scene.set_muscles_enabled(false);
-    for (std::size_t i = 0; i < with.vertex_count; ++i) b[p.scene.skin_layout().original[i]] = without.position(0, i);
+    set_muscles_enabled(p.scene, true);
+    for (std::size_t i = 0; i < with.vertex_count; ++i) a[current_layout(p.scene).original[i]] = with.position(0, i);
+    set_muscles_enabled(p.scene, false);
+    for (std::size_t i = 0; i < with.vertex_count; ++i) b[current_layout(p.scene).original[i]] = without.position(0, i);
     float worst = 0.0f;
     for (std::size_t v = 0; v < a.size(); ++v) worst = std::max(worst, glm::length(a[v] - b[v]));
     EXPECT_LT(worst, 1e-6f) << "level " << level;
@@ -278,13 +281,13 @@ TEST(MuscleSystem, BicepsBulgesMonotonicallyWithFlexionAndRelaxesOnExtension) {
     p.pose(90.0f, elbow);
     MuscleGains off;
     off.global = 0.0f;
-    p.scene.set_muscle_gains(off);
+    set_muscle_gains(p.scene, off);
     const SkinnedCrowd lbs = p.run();
-    p.scene.set_muscle_gains({});
+    set_muscle_gains(p.scene, {});
     const SkinnedCrowd& with = p.run();
     float best = -1.0f;
     for (std::size_t i = 0; i < with.vertex_count; ++i) {
-      const std::uint32_t b = p.scene.skin_layout().muscle_slot[i];
+      const std::uint32_t b = current_layout(p.scene).muscle_slot[i];
       if (b != SkinLayout::kNoMuscle && binding.line[b] == biceps)
         best = std::max(best, glm::dot(with.position(0, i) - lbs.position(0, i), with.normal(0, i)));
     }
@@ -307,12 +310,12 @@ TEST(MuscleSystem, BicepsBulgesMonotonicallyWithFlexionAndRelaxesOnExtension) {
 // matrix: the force clamps to 1 / min_length_ratio - 1 and every output is finite.
 TEST(MuscleSystem, ZeroLengthSegmentsClampWithoutInfOrNan) {
   Rig rig = default_rig();
-  CrowdScene scene(rig);
+  Crowd scene(rig);
   CrowdConfig config;
   config.walkers = 2;
   config.motion = MotionSource::Clip;
   config.clip = kRestPose;
-  scene.spawn_crowd(config);
+  spawn_crowd(scene, config);
   const MuscleSet& set = rig.muscles->set;
   const ActionLine& biceps = set.lines[set.find("l_biceps")];
   const WalkerLanes l = scene.lanes();
@@ -333,9 +336,9 @@ TEST(MuscleSystem, ZeroLengthSegmentsClampWithoutInfOrNan) {
     }
   EXPECT_FLOAT_EQ(l.at(l.muscle_force, biceps.first_point)[0], 1.0f / set.min_length_ratio - 1.0f);
   EXPECT_FLOAT_EQ(l.at(l.muscle_force, biceps.first_point)[1], 1.0f / set.min_length_ratio - 1.0f);
-  scene.set_body_level(2);
+  set_detail_level(scene, DetailLevel::mesh(2));
   SkinnedCrowd out;
-  skin_system(scene.skin_layout(), l, out);
+  skin_system(current_layout(scene), l, out);
   for (std::size_t w = 0; w < 2; ++w)
     for (std::size_t v = 0; v < out.vertex_count; ++v) {
       const glm::vec3 p = out.position(w, v), n = out.normal(w, v);
@@ -345,7 +348,7 @@ TEST(MuscleSystem, ZeroLengthSegmentsClampWithoutInfOrNan) {
 
 // Editing one muscle's force moves exactly the vertices bound to it (with a non-zero coefficient), nothing else.
 TEST(MuscleSystem, EditingOneMuscleChangesOnlyItsVertices) {
-  Posed p(1);
+  Posed p(DetailLevel::mesh(1));
   p.pose(60.0f, 100.0f);
   const SkinnedCrowd before = p.run();
   const MuscleSet& set = p.scene.rig().muscles->set;
@@ -353,12 +356,12 @@ TEST(MuscleSystem, EditingOneMuscleChangesOnlyItsVertices) {
   MuscleGains gains;
   gains.line.assign(set.lines.size(), 1.0f);
   gains.line[biceps] = 2.0f;
-  p.scene.set_muscle_gains(gains);
+  set_muscle_gains(p.scene, gains);
   const SkinnedCrowd& after = p.run();
   const MuscleBinding& binding = p.scene.rig().muscles->levels[1];
   std::size_t moved = 0;
   for (std::size_t i = 0; i < after.vertex_count; ++i) {
-    const std::uint32_t b = p.scene.skin_layout().muscle_slot[i];
+    const std::uint32_t b = current_layout(p.scene).muscle_slot[i];
     const bool mine = b != SkinLayout::kNoMuscle && binding.line[b] == biceps;
     const bool changed = after.position(0, i) != before.position(0, i);
     if (!mine) {
@@ -373,14 +376,14 @@ TEST(MuscleSystem, SameBytesForOneAndTwoThreads) {
   std::vector<float> result[2];
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    CrowdScene scene(default_rig());
+    Crowd scene(default_rig());
     CrowdConfig config;
     config.walkers = 150;  // several 64-walker chunks
     config.motion = MotionSource::Walk;
-    scene.spawn_crowd(config);
-    scene.set_body_level(-1);
+    spawn_crowd(scene, config);
+    set_detail_level(scene, DetailLevel::none());
     Profiler profiler(8, false);
-    for (int f = 0; f < 4; ++f) scene.simulate(1.0f / 30.0f, profiler);
+    for (int f = 0; f < 4; ++f) step(scene, 1.0f / 30.0f, profiler);
     const WalkerLanes l = scene.lanes();
     for (float* base : {l.muscle_point, l.muscle_frame, l.muscle_length, l.muscle_force})
       result[threads - 1].insert(result[threads - 1].end(), base, base + l.stride);
@@ -403,8 +406,8 @@ namespace {
 // At the subdivision levels the muscle layer displaces the cage before it is refined: nothing at rest, a bulge
 // over the biceps once the elbow flexes.
 TEST(MuscleSystem, DisplacesTheSubdivisionCageBeforeRefinement) {
-  Posed p(subdiv_level(1));
-  ASSERT_EQ(p.scene.body_level(), subdiv_level(1));
+  Posed p(DetailLevel::subdiv(1));
+  ASSERT_EQ(p.scene.skin.level, DetailLevel::subdiv(1));
   ASSERT_TRUE(p.scene.rig().muscles->cage.has_value());
   ASSERT_GT(p.scene.rig().muscles->cage->size(), 100u);
   // The cage's displacement list built as the frame script builds it, refined with and without it.
@@ -413,11 +416,11 @@ TEST(MuscleSystem, DisplacesTheSubdivisionCageBeforeRefinement) {
   fk_system(p.scene.rig().skeleton, l);
   muscle_system(p.scene.rig().muscles->set, l);
   SkinnedCrowd plain, bulged;
-  subdiv_system(*p.scene.subdiv(), l, plain, nullptr);
+  subdiv_system(*p.scene.skin.subdiv.get(), l, plain, nullptr);
   const MuscleRig& m = *p.scene.rig().muscles;
   const MuscleDisplacementList list =
-      make_muscle_displacement_list(p.scene.subdiv()->cage_layout, *m.cage, muscle_coefficients(m.set, *m.cage));
-  subdiv_system(*p.scene.subdiv(), l, bulged, &list);
+      make_muscle_displacement_list(p.scene.skin.subdiv.get()->cage_layout, *m.cage, muscle_coefficients(m.set, *m.cage));
+  subdiv_system(*p.scene.skin.subdiv.get(), l, bulged, &list);
   float largest = 0.0f;
   for (std::size_t v = 0; v < plain.vertex_count; ++v) {
     const glm::vec3 d = bulged.position(0, v) - plain.position(0, v);
@@ -428,8 +431,8 @@ TEST(MuscleSystem, DisplacesTheSubdivisionCageBeforeRefinement) {
   p.pose(0.0f, 0.0f);
   fk_system(p.scene.rig().skeleton, l);
   muscle_system(p.scene.rig().muscles->set, l);
-  subdiv_system(*p.scene.subdiv(), l, plain, nullptr);
-  subdiv_system(*p.scene.subdiv(), l, bulged, &list);
+  subdiv_system(*p.scene.skin.subdiv.get(), l, plain, nullptr);
+  subdiv_system(*p.scene.skin.subdiv.get(), l, bulged, &list);
   for (std::size_t v = 0; v < plain.vertex_count; ++v) ASSERT_EQ(bulged.position(0, v), plain.position(0, v));
 }
 

@@ -14,11 +14,14 @@
 #include "rig/body_rig.h"
 #include "rig/muscle_binding.h"
 #include "systems/fk.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/muscle.h"
 #include "systems/skin.h"
 #include "systems/skin_kernel.h"
 #include "reference/skin_reference.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -68,13 +71,13 @@ TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
   std::mt19937_64 rng(11);
   std::normal_distribution<float> gauss(0.0f, 0.35f);
   for (int level = 0; level < 3; ++level) {
-    CrowdScene scene(rig);
+    Crowd scene(rig);
     CrowdConfig config;
     config.walkers = 3;
     config.motion = MotionSource::Walk;
-    scene.spawn_crowd(config);
-    scene.set_body_level(level);
-    const SkinLayout& layout = scene.skin_layout();
+    spawn_crowd(scene, config);
+    set_detail_level(scene, DetailLevel::mesh(level));
+    const SkinLayout& layout = current_layout(scene);
     const BodyLevel& body = rig.body->levels[static_cast<std::size_t>(level)];
     Profiler profiler(8, false);
     const std::size_t padded = pad_to_lanes(layout.vertex_count);
@@ -82,7 +85,7 @@ TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
     const SkinOutput soa = skin_output_in(out.data(), padded);
     float worst_p = 0.0f, worst_n = 0.0f;
     for (int trial = 0; trial < 6; ++trial) {
-      scene.simulate(0.13f, profiler);
+      step(scene, 0.13f, profiler);
       WalkerLanes lanes = scene.lanes();
       if (trial >= 3) {  // walker 1: a random rotation on every joint, then FK again
         for (std::uint32_t j = 0; j < lanes.joints; ++j) {
@@ -97,7 +100,7 @@ TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
         skin_walker(layout, lanes, w, soa);
         const std::vector<float> force = walker_muscle_forces(lanes, w);
         const MuscleReference muscles{&rig.muscles->set, &rig.muscles->levels[static_cast<std::size_t>(level)],
-                                      scene.muscle_gains(), force};
+                                      scene.skin.gains, force};
         const SkinnedVertices ref =
             skin_reference(body.mesh, body.binding, walker_skinning_matrices(lanes, w), muscles);
         const Placement P = placement_of(lanes, w);
@@ -126,15 +129,15 @@ TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
   std::vector<float> result[2];
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    CrowdScene scene(rig);
+    Crowd scene(rig);
     CrowdConfig config;
     config.walkers = 24;  // several 4-walker chunks
     config.motion = MotionSource::Walk;
-    scene.spawn_crowd(config);
-    scene.set_body_level(2);
+    spawn_crowd(scene, config);
+    set_detail_level(scene, DetailLevel::mesh(2));
     Profiler profiler(8, false);
-    for (int f = 0; f < 5; ++f) scene.simulate(1.0f / 30.0f, profiler);
-    const SkinnedCrowd& s = scene.skinned();
+    for (int f = 0; f < 5; ++f) step(scene, 1.0f / 30.0f, profiler);
+    const SkinnedCrowd& s = current_skinned(scene);
     for (const AlignedBuffer<float>* b : {&s.px, &s.py, &s.pz, &s.nx, &s.ny, &s.nz})
       result[threads - 1].insert(result[threads - 1].end(), b->data(), b->data() + s.walkers * s.stride);
   }

@@ -30,8 +30,12 @@
 #include "rig/subdiv_topology.h"
 #include "systems/animation_sample.h"
 #include "systems/fk.h"
-#include "scene/crowd_scene.h"
+#include "scene/crowd.h"
 #include "systems/subdiv.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "render/scene_draw.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -55,17 +59,17 @@ Rig default_rig() {
 }
 
 // One walker at the origin facing +Z in the rest pose, after one frame at `level`.
-std::unique_ptr<CrowdScene> rest_scene(const Rig& rig, int level) {
-  auto scene = std::make_unique<CrowdScene>(rig);
+std::unique_ptr<Crowd> rest_scene(const Rig& rig, DetailLevel level) {
+  auto scene = std::make_unique<Crowd>(rig);
   CrowdConfig config;
   config.motion = MotionSource::Clip;
   config.clip = kRestPose;
   config.walkers = 1;
   config.heading_jitter = 0.0f;
-  scene->spawn_crowd(config);
-  scene->set_body_level(level);
+  spawn_crowd(*scene, config);
+  set_detail_level(*scene, level);
   Profiler profiler(4, false);
-  scene->simulate(1.0f / 30.0f, profiler);
+  step(*scene, 1.0f / 30.0f, profiler);
   return scene;
 }
 
@@ -100,9 +104,9 @@ TEST(Subdiv, RestCageMatchesOpenSubdivRefinement) {
   const Rig rig = default_rig();
   const Mesh& cage = rig.body->cage->mesh;
   for (int depth = 1; depth <= kMaxSubdivDepth; ++depth) {
-    const auto scene = rest_scene(rig, subdiv_level(depth));
-    ASSERT_NE(scene->subdiv(), nullptr);
-    const SkinnedCrowd& out = scene->skinned();
+    const auto scene = rest_scene(rig, DetailLevel::subdiv(depth));
+    ASSERT_NE(scene->skin.subdiv.get(), nullptr);
+    const SkinnedCrowd& out = current_skinned(*scene);
 
     std::unique_ptr<Far::TopologyRefiner> refiner = make_cage_refiner(cage);
     refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(depth));
@@ -125,7 +129,7 @@ TEST(Subdiv, RestCageMatchesOpenSubdivRefinement) {
     ASSERT_EQ(out.vertex_count, level.size());
     ASSERT_EQ(factorised.size(), level.size());
     float worst = 0.0f, worst_factorised = 0.0f;
-    const std::vector<std::uint32_t>& osd = scene->subdiv()->opensubdiv_vertex;
+    const std::vector<std::uint32_t>& osd = scene->skin.subdiv.get()->opensubdiv_vertex;
     ASSERT_EQ(osd.size(), level.size());
     for (std::size_t i = 0; i < level.size(); ++i) {
       const glm::vec3 p = out.position(0, i);
@@ -136,17 +140,17 @@ TEST(Subdiv, RestCageMatchesOpenSubdivRefinement) {
     }
     // The renumbered triangles are OpenSubdiv's faces, in its face order.
     const Far::TopologyLevel& last = refiner->GetLevel(depth);
-    ASSERT_EQ(scene->subdiv()->triangles.size(), 3u * static_cast<std::size_t>(last.GetNumFaces()));
+    ASSERT_EQ(scene->skin.subdiv.get()->triangles.size(), 3u * static_cast<std::size_t>(last.GetNumFaces()));
     for (int f = 0; f < last.GetNumFaces(); ++f)
       for (int k = 0; k < 3; ++k)
-        ASSERT_EQ(osd[scene->subdiv()->triangles[3 * static_cast<std::size_t>(f) + k]],
+        ASSERT_EQ(osd[scene->skin.subdiv.get()->triangles[3 * static_cast<std::size_t>(f) + k]],
                   static_cast<std::uint32_t>(last.GetFaceVertices(f)[k]));
     EXPECT_LT(worst, 1e-5f) << "S" << depth;
     EXPECT_LT(worst_factorised, 1e-5f) << "S" << depth;
 
     // Normals: the area-weighted average compute_normals (an independent implementation) gives on the same mesh.
     Mesh refined;
-    refined.triangles = scene->subdiv()->triangles;
+    refined.triangles = scene->skin.subdiv.get()->triangles;
     for (std::size_t i = 0; i < out.vertex_count; ++i) refined.positions.push_back(out.position(0, i));
     compute_normals(refined);
     float normal_gap = 0.0f;
@@ -174,15 +178,15 @@ TEST(Subdiv, RefinedCageStaysWatertight) {
 // every normal unit length.
 TEST(Subdiv, NoNanOnExtremePoses) {
   const Rig rig = default_rig();
-  CrowdScene scene(rig);
+  Crowd scene(rig);
   CrowdConfig config;
   config.motion = MotionSource::Clip;
   config.clip = kRestPose;
   config.walkers = 6;
-  scene.spawn_crowd(config);
-  scene.set_body_level(subdiv_level(2));
+  spawn_crowd(scene, config);
+  set_detail_level(scene, DetailLevel::subdiv(2));
   Profiler profiler(4, false);
-  scene.simulate(0.1f, profiler);
+  step(scene, 0.1f, profiler);
   std::mt19937_64 rng(5);
   std::normal_distribution<float> wild(0.0f, 3.0f);
   WalkerLanes lanes = scene.lanes();
@@ -201,9 +205,9 @@ TEST(Subdiv, NoNanOnExtremePoses) {
     for (std::size_t w : {1, 2})
       for (std::uint32_t c = 0; c < kAffineFloats; ++c) lanes.skinning[(j * kAffineFloats + c) * lanes.stride + w] = 0.0f;
   }
-  scene.walkers().f32(kWalkerPlacement, 4)[3] = 0.0f;
+  scene.table(initial_slot(scene)).f32(kWalkerPlacement, 4)[3] = 0.0f;
   SkinnedCrowd out;
-  subdiv_system(*scene.subdiv(), lanes, out);
+  subdiv_system(*scene.skin.subdiv.get(), lanes, out);
   std::size_t bad = 0, plus_y = 0;
   for (std::size_t w = 0; w < out.walkers; ++w)
     for (std::size_t v = 0; v < out.vertex_count; ++v) {
@@ -218,55 +222,59 @@ TEST(Subdiv, NoNanOnExtremePoses) {
 
 TEST(Subdiv, LevelSwitchingAtRunTimeChangesWhatIsDrawn) {
   const Rig rig = default_rig();
-  CrowdScene scene(rig);
+  Crowd scene(rig);
   CrowdConfig config;
   config.walkers = 3;
   config.motion = MotionSource::Walk;
-  scene.spawn_crowd(config);
+  spawn_crowd(scene, config);
   Profiler profiler(4, false);
   const std::size_t cage_triangles = rig.body->cage->mesh.triangle_count();
-  const int order[] = {0, subdiv_level(2), 1, subdiv_level(1), subdiv_level(3), 2, subdiv_level(2), -1};
-  for (int level : order) {
-    scene.set_body_level(level);
-    scene.simulate(1.0f / 30.0f, profiler);
-    EXPECT_EQ(scene.body_level(), level);
-    if (level < 0) {
-      EXPECT_EQ(scene.skinned().vertex_count, 0u);
+  const DetailLevel order[] = {DetailLevel::mesh(0), DetailLevel::subdiv(2), DetailLevel::mesh(1),
+                               DetailLevel::subdiv(1), DetailLevel::subdiv(3), DetailLevel::mesh(2),
+                               DetailLevel::subdiv(2), DetailLevel::none()};
+  for (DetailLevel level : order) {
+    set_detail_level(scene, level);
+    step(scene, 1.0f / 30.0f, profiler);
+    EXPECT_TRUE(scene.skin.level == level) << level.name();
+    if (level.is_none()) {
+      EXPECT_EQ(current_skinned(scene).walkers, 0u);
+      EXPECT_TRUE(body_draw_inputs(scene).empty());
       continue;
     }
-    const std::size_t expected = is_subdiv_level(level) ? cage_triangles << (2 * subdiv_depth(level))
-                                                        : rig.body->levels[static_cast<std::size_t>(level)].mesh.triangle_count();
-    EXPECT_EQ(scene.body_triangles().size(), 3 * expected) << body_level_name(level);
-    const std::size_t vertices = is_subdiv_level(level) ? scene.subdiv()->vertex_count
-                                                        : rig.body->levels[static_cast<std::size_t>(level)].mesh.vertex_count();
-    EXPECT_EQ(scene.skinned().vertex_count, vertices) << body_level_name(level);
-    EXPECT_EQ(scene.skinned().walkers, 3u);
+    const auto mesh = static_cast<std::size_t>(level.index());
+    const std::size_t expected = level.is_subdiv() ? cage_triangles << (2 * level.index())
+                                                   : rig.body->levels[mesh].mesh.triangle_count();
+    EXPECT_EQ(current_triangles(scene).size(), 3 * expected) << level.name();
+    const std::size_t vertices = level.is_subdiv() ? scene.skin.subdiv.get()->vertex_count
+                                                   : rig.body->levels[mesh].mesh.vertex_count();
+    EXPECT_EQ(current_skinned(scene).vertex_count, vertices) << level.name();
+    EXPECT_EQ(current_skinned(scene).walkers, 3u);
   }
   // A body without a cage draws level 0 when asked for S levels.
   Rig plain = rig;
   plain.body = std::make_shared<const Body>(Body{rig.body->levels});
-  CrowdScene no_cage(plain);
-  no_cage.set_body_level(subdiv_level(2));
-  EXPECT_EQ(no_cage.body_level(), 0);
-  EXPECT_EQ(no_cage.subdiv(), nullptr);
+  Crowd no_cage(plain);
+  set_detail_level(no_cage, DetailLevel::subdiv(2));
+  EXPECT_EQ(no_cage.skin.level, DetailLevel::mesh(0));
+  EXPECT_EQ(no_cage.skin.subdiv.get(), nullptr);
 }
 
 TEST(Subdiv, AnyThreadCountGivesTheSameBytes) {
   const Rig rig = default_rig();
-  CrowdScene scene(rig);
+  Crowd scene(rig);
   CrowdConfig config;
   config.walkers = 7;
   config.motion = MotionSource::Walk;
-  scene.spawn_crowd(config);
-  scene.set_body_level(subdiv_level(1));
+  spawn_crowd(scene, config);
+  set_detail_level(scene, DetailLevel::subdiv(1));
   Profiler profiler(4, false);
-  scene.simulate(0.2f, profiler);
+  step(scene, 0.2f, profiler);
   SkinnedCrowd one, many;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    subdiv_system(*scene.subdiv(), scene.lanes(), one);
+    subdiv_system(*scene.skin.subdiv.get(), scene.lanes(), one);
   }
-  subdiv_system(*scene.subdiv(), scene.lanes(), many);
+  subdiv_system(*scene.skin.subdiv.get(), scene.lanes(), many);
   ASSERT_EQ(one.px.size(), many.px.size());
   EXPECT_EQ(std::memcmp(one.px.data(), many.px.data(), one.px.size() * 4), 0);
   EXPECT_EQ(std::memcmp(one.nz.data(), many.nz.data(), one.nz.size() * 4), 0);

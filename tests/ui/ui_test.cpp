@@ -21,6 +21,9 @@
 #include "tests/apps/strata_cli_runner.h"
 #include "ui/imgui_layer.h"
 #include "ui/view_panel.h"
+#include "scene/state_hash.h"
+#include "scene/body_settings.h"
+#include "scene/step.h"
 
 namespace strata {
 namespace {
@@ -128,13 +131,13 @@ TEST_F(UiTest, PauseHoldsTheSceneAndStepAdvancesOneFrame) {
   frame();
   click("Pause");
   ASSERT_TRUE(session_->panel().paused);
-  const std::uint64_t held = session_->scene().state_hash();
+  const std::uint64_t held = state_hash(session_->scene());
   EXPECT_EQ(session_->advance(0.5f, profiler), 0.0f);
-  EXPECT_EQ(session_->scene().state_hash(), held) << "a paused scene moved";
+  EXPECT_EQ(state_hash(session_->scene()), held) << "a paused scene moved";
   click("Step");
   EXPECT_EQ(session_->panel().step_requests, 1);
   EXPECT_FLOAT_EQ(session_->advance(0.5f, profiler), 1.0f / 30.0f);
-  EXPECT_NE(session_->scene().state_hash(), held) << "a single step did not move the scene";
+  EXPECT_NE(state_hash(session_->scene()), held) << "a single step did not move the scene";
   EXPECT_EQ(session_->panel().step_requests, 0);
   click("Pause");  // now labelled Resume, same place
   EXPECT_FALSE(session_->panel().paused);
@@ -143,12 +146,12 @@ TEST_F(UiTest, PauseHoldsTheSceneAndStepAdvancesOneFrame) {
 TEST_F(UiTest, LevelComboSwitchesTheSceneLevel) {
   frame();
   frame();
-  ASSERT_EQ(session_->scene().body_level(), 0);
+  ASSERT_EQ(session_->scene().skin.level, DetailLevel::mesh(0));
   click("level");  // opens the combo; its items are drawn (and probed) from the next frame
   frame();
   ASSERT_TRUE(probe_.rects.count("level:2")) << "the combo did not list level 2";
   click("level:2");
-  EXPECT_EQ(session_->scene().body_level(), 2);
+  EXPECT_EQ(session_->scene().skin.level, DetailLevel::mesh(2));
 }
 
 TEST_F(UiTest, MuscleGainSliderReachesTheScene) {
@@ -158,35 +161,35 @@ TEST_F(UiTest, MuscleGainSliderReachesTheScene) {
   click("tab:Muscles");
   frame();
   ASSERT_TRUE(probe_.rects.count("all muscles")) << "the muscle section did not open";
-  EXPECT_FLOAT_EQ(session_->scene().muscle_gains().global, 1.0f);
+  EXPECT_FLOAT_EQ(session_->scene().skin.gains.global, 1.0f);
   press_slider_left("all muscles");
-  EXPECT_LT(session_->scene().muscle_gains().global, 0.05f);
+  EXPECT_LT(session_->scene().skin.gains.global, 0.05f);
   click("Reset gains");
-  EXPECT_FLOAT_EQ(session_->scene().muscle_gains().global, 1.0f);
+  EXPECT_FLOAT_EQ(session_->scene().skin.gains.global, 1.0f);
 }
 
 TEST_F(UiTest, GaitSliderReachesTheWalkGenerator) {
-  ASSERT_EQ(session_->scene().motion(), MotionSource::Walk);
+  ASSERT_EQ(session_->scene().motion.source, MotionSource::Walk);
   frame();
   frame();
   click("tab:Gait");
   frame();
   ASSERT_TRUE(probe_.rects.count("arm swing"));
-  ASSERT_GT(session_->scene().style().arm_swing, 0.0f);
+  ASSERT_GT(session_->scene().motion.style.arm_swing, 0.0f);
   press_slider_left("arm swing");
-  EXPECT_EQ(session_->scene().style().arm_swing, 0.0f);
+  EXPECT_EQ(session_->scene().motion.style.arm_swing, 0.0f);
   click("Default gait");
-  EXPECT_EQ(session_->scene().style().arm_swing, GaitStyle{}.arm_swing);
+  EXPECT_EQ(session_->scene().motion.style.arm_swing, GaitStyle{}.arm_swing);
 }
 
 TEST_F(UiTest, NewCrowdHasTheAskedSizeAndKeepsTheUsersSettings) {
-  CrowdScene& before = session_->scene();
-  before.set_body_level(1);
+  Crowd& before = session_->scene();
+  set_detail_level(before, DetailLevel::mesh(1));
   MuscleGains gains;
   gains.global = 2.5f;
-  before.set_muscle_gains(gains);
-  before.style().arm_swing = 0.3f;
-  before.lod_policy().hysteresis = 1.5f;
+  set_muscle_gains(before, gains);
+  before.motion.style.arm_swing = 0.3f;
+  before.lod.policy.hysteresis = 1.5f;
   frame();
   frame();
   session_->panel().walkers = 7;
@@ -194,18 +197,18 @@ TEST_F(UiTest, NewCrowdHasTheAskedSizeAndKeepsTheUsersSettings) {
   ASSERT_TRUE(session_->panel().rebuild_requested);
   ASSERT_TRUE(session_->apply_crowd_request());
   EXPECT_FALSE(session_->panel().rebuild_requested);
-  const CrowdScene& after = session_->scene();
+  const Crowd& after = session_->scene();
   EXPECT_EQ(after.walker_count(), 7u);
-  EXPECT_EQ(after.body_level(), 1);
-  EXPECT_FLOAT_EQ(after.muscle_gains().global, 2.5f);
-  EXPECT_FLOAT_EQ(session_->scene().style().arm_swing, 0.3f);
-  EXPECT_FLOAT_EQ(session_->scene().lod_policy().hysteresis, 1.5f);
+  EXPECT_EQ(after.skin.level, DetailLevel::mesh(1));
+  EXPECT_FLOAT_EQ(after.skin.gains.global, 2.5f);
+  EXPECT_FLOAT_EQ(session_->scene().motion.style.arm_swing, 0.3f);
+  EXPECT_FLOAT_EQ(session_->scene().lod.policy.hysteresis, 1.5f);
   EXPECT_FALSE(session_->apply_crowd_request()) << "one request, one new crowd";
   // Paused before the first frame, the new crowd still gets skinned bodies to draw.
   session_->panel().paused = true;
   Profiler profiler(16, false);
   session_->advance(0.1f, profiler);
-  EXPECT_EQ(session_->scene().skinned().walkers, 7u);
+  EXPECT_EQ(current_skinned(session_->scene()).walkers, 7u);
 }
 
 TEST_F(UiTest, BindingTabStartsAndStopsTheEditor) {
@@ -259,7 +262,7 @@ TEST(TimingHistory, KeepsTheLastFramesOfEverySystemInFrameOrder) {
   TimingHistory history(5);
   for (int f = 0; f < 9; ++f) {
     profiler.begin_frame();
-    session.scene().simulate(1.0f / 30.0f, profiler);
+    step(session.scene(), 1.0f / 30.0f, profiler);
     profiler.end_frame();
     history.push(profiler);
   }
@@ -382,13 +385,13 @@ TEST(BindingEditorSession, ClickBindShowsSavesAndUndoes) {
 
 TEST(BindingEditorSession, ClickPicksOnTheWalkerUnderTheCursor) {
   EditorRig rig(4);
-  const SkinnedCrowd& s = rig.session.scene().skinned();
+  const SkinnedCrowd& s = current_skinned(rig.session.scene());
   ASSERT_EQ(s.walkers, 4u);
   const auto project = [&](const glm::vec3& p) {
     const glm::vec4 c = rig.view_projection * glm::vec4(p, 1.0f);
     return glm::vec2{(c.x / c.w * 0.5f + 0.5f) * 800.0f, (0.5f - c.y / c.w * 0.5f) * 600.0f};
   };
-  const std::vector<std::uint32_t>& original = rig.session.scene().skin_layout().original;
+  const std::vector<std::uint32_t>& original = current_layout(rig.session.scene()).original;
   for (std::size_t k = 0; k < s.walkers; ++k) {
     // Aim at the walker's pelvis height: the centre of its bounds.
     glm::vec3 lo = s.position(k, 0), hi = lo;
@@ -486,12 +489,12 @@ TEST(BindingEditorSession, EditsSurviveANewCrowdAndFollowTheLevel) {
   EXPECT_EQ(rig.level_binding().weights, edited.weights) << "a new crowd lost the edits";
   EXPECT_TRUE(b.active) << "editing goes on in the new crowd";
   // Another mesh level: the editor follows it, and the file keeps both levels' edits apart.
-  rig.session.scene().set_body_level(2);
+  set_detail_level(rig.session.scene(), DetailLevel::mesh(2));
   rig.session.apply_binding_requests();
   EXPECT_TRUE(b.active);
   EXPECT_EQ(b.level, 2);
   EXPECT_EQ(rig.session.binding_tables().overrides.size(), default_binding_tables().overrides.size() + 1);
-  rig.session.scene().set_body_level(kAutoBodyLevel);
+  set_detail_level(rig.session.scene(), DetailLevel::automatic());
   rig.session.apply_binding_requests();
   EXPECT_FALSE(b.active) << "weights cannot be edited on the automatic mix of levels";
 }

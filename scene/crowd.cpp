@@ -1,0 +1,76 @@
+#include "scene/crowd.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "scene/body_settings.h"
+
+namespace strata {
+
+const char* slot_name(DetailSlot slot) {
+  switch (slot) {
+    case DetailSlot::Mesh0: return "level0";
+    case DetailSlot::Mesh1: return "level1";
+    case DetailSlot::Mesh2: return "level2";
+    case DetailSlot::Refined: return "refined";
+    case DetailSlot::Culled: return "culled";
+    case DetailSlot::NoBody: return "no_body";
+  }
+  return "?";
+}
+
+Crowd::Crowd(Rig r) {
+  const auto joints = static_cast<std::uint32_t>(r.skeleton.joint_count());
+  const std::string name = r.name.empty() ? std::string("walkers") : r.name;
+  const std::uint32_t muscle_points = r.muscles ? r.muscles->set.point_count : 0;
+  if (r.muscles && (!r.body || r.muscles->levels.size() != r.body->levels.size()))
+    throw std::invalid_argument("Crowd: the muscle layer is bound to " + std::to_string(r.muscles->levels.size()) +
+                                " body levels, the body has " + std::to_string(r.body ? r.body->levels.size() : 0));
+  rig_id = rigs.add(std::move(r));
+  // One table per slot, identical fields, so World::move copies every field and a walker keeps its whole state
+  // whatever table it moves to.
+  for (std::size_t s = 0; s < kDetailSlots; ++s)
+    tables[s] = world.add_table(
+        make_walker_table(name + "." + slot_name(static_cast<DetailSlot>(s)), joints, muscle_points));
+  try {
+    motion.locomotion = std::make_unique<const LocomotionRig>(make_locomotion_rig(rig().skeleton));
+  } catch (const std::exception& e) {
+    motion.walk_error = e.what();
+  }
+  // Rest height for projected sizes: the body's, else the skeleton's joint span plus a head's worth.
+  const Rig& rr = rig();
+  if (rr.body && !rr.body->levels.empty() && !rr.body->levels[0].mesh.positions.empty()) {
+    float lo = 1e30f, hi = -1e30f;
+    for (const glm::vec3& p : rr.body->levels[0].mesh.positions) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
+    skin.body_height = hi - lo;
+  } else if (!rr.skeleton.centers.empty()) {
+    float lo = 1e30f, hi = -1e30f;
+    for (const glm::vec3& c : rr.skeleton.centers) lo = std::min(lo, c.y), hi = std::max(hi, c.y);
+    skin.body_height = hi - lo + 0.15f;
+  }
+  set_detail_level(*this, DetailLevel::mesh(0));
+}
+
+DetailSlot Crowd::slot_of(Entity walker) const {
+  const std::uint32_t table_id = world.location(walker).table;
+  for (std::size_t s = 0; s < kDetailSlots; ++s)
+    if (tables[s] == table_id) return static_cast<DetailSlot>(s);
+  throw std::logic_error("Crowd::slot_of: walker in a table that is not a walker table");
+}
+
+WalkerLanes Crowd::lanes() {
+  std::size_t holding = kDetailSlots, non_empty = 0;
+  for (std::size_t s = 0; s < kDetailSlots; ++s)
+    if (world.table(tables[s]).size() > 0) holding = s, ++non_empty;
+  if (non_empty > 1)
+    throw std::logic_error("Crowd::lanes: the walkers are spread over " + std::to_string(non_empty) +
+                           " tables (culling or levels of detail); read each table with lanes(slot)");
+  return lanes(holding == kDetailSlots ? initial_slot(*this) : static_cast<DetailSlot>(holding));
+}
+
+const std::vector<LimbChain>& Crowd::limbs() const {
+  static const std::vector<LimbChain> kNone;
+  return motion.locomotion ? motion.locomotion->limbs : kNone;
+}
+
+}  // namespace strata

@@ -1,0 +1,137 @@
+#pragma once
+// Crowd: the data of one crowd of walkers of one rig, and nothing else. The logic that changes it lives beside it,
+// one responsibility per file:
+//
+//   scene/spawn.h          putting walkers in (grid, stadium track, motion capture) and taking them out
+//   scene/body_settings.h  what bodies are drawn with: detail level, muscle layer and gains, edited weights
+//   scene/step.h           step(): one frame of the fixed-order system script, with its FrameProfile
+//   scene/state_hash.h     the determinism pin
+//   render/render_frame.h  render_frame(): drawing the last step and giving the camera to the next one
+//
+// Where a walker's state is: every walker is a row (entity) of one of the walker tables below, one table per
+// DetailSlot. The slot is the walker's detail state — which mesh level it is skinned at this frame, refined
+// from the cage, outside the camera (culled), or not skinned at all — so the skin pass for level k is a plain loop
+// over table k, and a walker whose level changes is moved between tables (World::move) by the level-of-detail
+// stage, which keeps hysteresis by reading the table a walker is in. No per-walker flag is tested in a hot loop.
+//
+// Skinned vertices are per-slot component storage: `skinned[slot]` holds block b's deformed body for row b of
+// that slot's table, sized by that table's walkers (grown, never shrunk), so memory follows the walkers drawn at
+// each level rather than the crowd.
+//
+// Shared immutable rig data (skeleton, body levels and bindings, muscle set) is stored once in `rigs`; per-rig
+// derived resources that the systems read (locomotion limbs, the mocap rig, skin layouts, the refined cage) are
+// built once by the functions above and stored here, not per walker.
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "components/detail_level.h"
+#include "components/rig.h"
+#include "components/skin_layout.h"
+#include "components/walker.h"
+#include "ecs/world.h"
+#include "motion/cardinal_spline.h"
+#include "motion/retarget.h"
+#include "systems/locomotion.h"
+#include "systems/lod.h"
+#include "systems/mocap_drive.h"
+#include "systems/skin.h"
+#include "systems/skin_kernel.h"
+
+namespace strata {
+
+struct SubdivSurface;
+
+// What drives a crowd's walkers, which picks the frame's first systems (scene/step.h).
+enum class MotionSource { Walk, Clip, Mocap };
+
+// The walker tables: a walker sits in exactly one.
+enum class DetailSlot : std::uint8_t {
+  Mesh0,    // skinned at mesh level 0 this frame
+  Mesh1,    // mesh level 1
+  Mesh2,    // mesh level 2
+  Refined,  // the cage skinned and refined (S1..S3)
+  Culled,   // outside the camera: simulated, not skinned, not drawn
+  NoBody,   // DetailLevel::none(), or a rig without a body: simulated, drawn as a skeleton
+};
+inline constexpr std::size_t kDetailSlots = 6;
+inline constexpr std::size_t slot_index(DetailSlot s) { return static_cast<std::size_t>(s); }
+inline constexpr DetailSlot mesh_slot(int level) { return static_cast<DetailSlot>(level); }
+static_assert(kMaxMeshLevels == 3, "one Mesh slot per mesh level");
+const char* slot_name(DetailSlot slot);
+
+// How walkers move: the motion source and what it needs (per rig, built once, read by the systems).
+struct CrowdMotion {
+  MotionSource source = MotionSource::Clip;
+  std::unique_ptr<const LocomotionRig> locomotion;  // null when the rig cannot walk
+  std::string walk_error;                           // why it cannot, when it cannot
+  std::vector<CardinalSpline> paths;                // paths walking walkers follow (their integer path column)
+  GaitStyle style;
+  std::unique_ptr<const RetargetResult> mocap;  // owns the clip and contacts mocap_rig points at
+  std::unique_ptr<const MocapRig> mocap_rig;
+};
+
+// What bodies are skinned with (scene/body_settings.h keeps it consistent with the rig).
+struct CrowdSkin {
+  DetailLevel requested;  // what was asked for (set_detail_level)
+  DetailLevel level = DetailLevel::none();  // what is used: requested, clamped to what the rig's body has
+  bool muscles_on = true;
+  MuscleGains gains;
+  // Per mesh level in use, its vertex grouping (the skin kernel's input) with this crowd's muscle coefficients;
+  // empty for the levels not in use.
+  std::array<SkinLayout, kMaxMeshLevels> layouts;
+  std::shared_ptr<const SubdivSurface> subdiv;  // at S levels (owned by the rig's Body; shared)
+  MuscleDisplacementList cage_muscles;          // S levels: the cage's muscle displacement, this crowd's gains
+  float body_height = 1.75f;                    // rest height of the rig's body (m), for projected sizes
+};
+
+// Level of detail: the camera the last render_frame() handed over, and the policy.
+struct CrowdLod {
+  std::optional<LodView> view;  // none: no culling, every walker at the requested (or finest) level
+  LodPolicy policy;
+  // Walkers skinned at levels 0, 1, 2 (S levels count as 0) by the last step, and walkers culled.
+  std::array<std::size_t, 4> counts{};
+  // Scratch of the level-of-detail stage, per table: each row's slot for the next skin pass. Grown, never shrunk.
+  std::array<std::vector<std::uint8_t>, kDetailSlots> decided;
+  std::vector<std::pair<Entity, DetailSlot>> moves;  // scratch: the walkers that change tables this frame
+};
+
+struct Crowd {
+  // Makes the tables for `rig` and the per-rig resources; throws std::invalid_argument when the rig's muscle
+  // layer does not match its body.
+  explicit Crowd(Rig rig);
+  Crowd(const Crowd&) = delete;
+  Crowd& operator=(const Crowd&) = delete;
+
+  World world;
+  std::array<std::uint32_t, kDetailSlots> tables{};  // walker table id per DetailSlot
+  RigLibrary rigs;
+  RigId rig_id = 0;
+  CrowdMotion motion;
+  CrowdSkin skin;
+  CrowdLod lod;
+  std::array<SkinnedCrowd, kDetailSlots> skinned;  // per slot; Culled and NoBody stay empty
+
+  const Rig& rig() const { return rigs.get(rig_id); }
+  std::uint32_t joint_count() const { return static_cast<std::uint32_t>(rig().skeleton.joint_count()); }
+  SoaTable& table(DetailSlot slot) { return world.table(tables[slot_index(slot)]); }
+  const SoaTable& table(DetailSlot slot) const { return world.table(tables[slot_index(slot)]); }
+  std::size_t walker_count() const { return world.alive_count(); }
+  // The slot a live walker is in.
+  DetailSlot slot_of(Entity walker) const;
+  // Kernel view of one table (valid until that table grows or shrinks).
+  WalkerLanes lanes(DetailSlot slot) { return walker_lanes(table(slot), joint_count()); }
+  // Kernel view of the one table holding every walker: for tests and tools that read walkers in spawn order.
+  // Throws std::logic_error when the walkers are spread over several tables (a camera culls or levels them).
+  WalkerLanes lanes();
+  // Limb chains of the walk, empty when the rig cannot walk.
+  const std::vector<LimbChain>& limbs() const;
+  bool has_muscles() const { return rig().muscles != nullptr && rig().muscles->set.point_count > 0; }
+  bool muscles_enabled() const { return skin.muscles_on && has_muscles(); }
+};
+
+}  // namespace strata
