@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "apps/commands.h"
+#include "scene/input_formats.h"
 #include "scene/scene_setup.h"
 #include "io/bvh.h"
 #include "io/hanim_loader.h"
@@ -17,14 +18,14 @@ namespace strata::cli {
 namespace {
 
 // Meshes, skinned bodies and motion capture: the formats other than humanoid XML.
-int run_other_info(const std::string& path, const std::string& ext) {
+int run_other_info(const std::string& path, InputFormatId format) {
   try {
-    if (ext == ".bvh") {
+    if (format == InputFormatId::Bvh) {
       const BvhMotion m = load_bvh_file(path);
       std::cout << "file:       " << path << "\nformat:     BVH motion capture\njoints:     " << m.joint_count()
                 << " (+" << m.end_site_count() << " end sites), " << m.channel_count << " channels\nframes:     "
                 << m.frame_count << " at " << m.frame_time << " s (" << m.duration() << " s)\n";
-    } else if (ext == ".obj") {
+    } else if (format == InputFormatId::Obj) {
       const Mesh m = load_obj_file(path);
       std::cout << "file:       " << path << "\nformat:     Wavefront OBJ\nvertices:   " << m.vertex_count()
                 << "\ntriangles:  " << m.triangle_count() << "\nparts:      " << m.part_names.size() << "\n";
@@ -32,7 +33,7 @@ int run_other_info(const std::string& path, const std::string& ext) {
       const Rig rig = load_mesh_rig(path);
       const Mesh& m = rig.body->levels.front().mesh;
       std::cout << "file:       " << path << "\nformat:     "
-                << (ext == ".glb" || ext == ".gltf" ? "glTF 2.0 skinned mesh" : "MakeHuman hm08 body")
+                << (format == InputFormatId::Gltf ? "glTF 2.0 skinned mesh" : "MakeHuman hm08 body")
                 << "\njoints:     " << rig.skeleton.joint_count() << "\nvertices:   " << m.vertex_count()
                 << "\ntriangles:  " << m.triangle_count() << "\nparts:      " << m.part_names.size()
                 << "\nclips:      " << rig.clips.size() << "\n";
@@ -48,11 +49,11 @@ int run_other_info(const std::string& path, const std::string& ext) {
 }
 
 int run_info(const std::string& path) {
-  const std::string ext = std::filesystem::path(path).extension().string();
-  if (ext == ".bvh" || ext == ".obj" || ext == ".glb" || ext == ".gltf" || std::filesystem::is_directory(path))
-    return run_other_info(path, ext);
   HumanoidAsset asset;
   try {
+    // The one input-format table (scene/input_formats.h) decides what the path is, as it does for every command.
+    const InputFormatId format = identify_input(path).id;
+    if (format != InputFormatId::HAnim) return run_other_info(path, format);
     asset = load_humanoid_file(path);
   } catch (const std::exception& e) {
     std::cerr << "strata info: " << e.what() << "\n";

@@ -21,6 +21,7 @@
 #include "rig/muscle_binding.h"
 #include "rig/skin_from_skeleton.h"
 #include "scene/body_settings.h"
+#include "scene/input_formats.h"
 #include "scene/spawn.h"
 #include "systems/animation_sample.h"
 
@@ -69,10 +70,10 @@ int resolve_clip(const Rig& rig, const std::string& clip, bool rest) {
 
 Rig load_mesh_rig(const std::string& path) {
   namespace fs = std::filesystem;
-  const std::string ext = fs::path(path).extension().string();
+  const InputFormat& format = require_input(path, kGivesSkinnedBody, "--mesh");
   Rig rig;
-  if (ext == ".glb" || ext == ".gltf" || fs::is_directory(path)) {
-    ImportedBody imported = ext == ".glb" || ext == ".gltf" ? load_gltf(path) : load_makehuman(path);
+  if (format.id == InputFormatId::Gltf || format.id == InputFormatId::MakeHuman) {
+    ImportedBody imported = format.id == InputFormatId::Gltf ? load_gltf(path) : load_makehuman(path);
     rig.name = imported.mesh.name.empty() ? fs::path(path).stem().string() : imported.mesh.name;
     rig.skeleton = std::move(imported.skeleton);
     rig.clips = std::move(imported.clips);
@@ -93,6 +94,7 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   if (!o.mesh.empty()) {
     rig = load_mesh_rig(o.mesh);
   } else {
+    if (!o.skeleton.empty()) require_input(o.skeleton, kGivesSkeleton, "--skeleton");
     rig = to_rig(o.skeleton.empty() ? load_default_humanoid() : load_humanoid_file(o.skeleton));
     // The shipped skeleton comes with the shipped body; an X3D skeleton with a skin brings its own.
     // Loaded even without a body to draw, so a bad file fails the same way at every --level.
@@ -128,7 +130,8 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
     }
   } else if (o.motion == "clip") {
     config.motion = MotionSource::Clip;
-  } else if (o.motion.size() > 4 && o.motion.compare(o.motion.size() - 4, 4, ".bvh") == 0) {
+  } else if (std::filesystem::path(o.motion).has_extension()) {
+    require_input(o.motion, kGivesMotion, "--motion");
     // Motion capture: retargeted onto this skeleton by the Poser -> H-Anim map, feet locked by IK in stance.
     set_mocap(*scene, retarget_bvh(load_bvh_file(o.motion), scene->rig().skeleton));
     config.motion = MotionSource::Mocap;
