@@ -21,7 +21,7 @@
 #include "render/camera.h"
 #include "systems/animation_sample.h"
 #include "render/gl_context.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "scene/crowd_scene.h"
 #include "systems/pose_gather.h"
 
@@ -91,7 +91,7 @@ int run_crowd(const CrowdOptions& o) {
 
   try {
     auto context = create_headless_gl_context();
-    SkeletonRenderer renderer(o.width, o.height);
+    CrowdRenderer renderer(o.width, o.height);
     const bool bodies = scene.body_level() >= 0;
     renderer.options().draw_skeleton = !bodies || o.skeleton_overlay;
     Profiler profiler(120, true);

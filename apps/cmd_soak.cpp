@@ -21,7 +21,7 @@
 #include "profiling/profiler.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "systems/pose_gather.h"
 
 namespace strata::cli {
@@ -65,14 +65,14 @@ int run_soak(const SoakOptions& o) {
   try {
     std::unique_ptr<CrowdScene> scene = build_scene(o.scene);
     std::unique_ptr<GlContext> context;
-    std::unique_ptr<SkeletonRenderer> renderer;
+    std::unique_ptr<CrowdRenderer> renderer;
     OrbitCamera camera;
     std::vector<glm::vec3> joints;
     std::vector<std::uint8_t> pixels;
     const bool bodies = scene->body_level() >= 0;
     if (o.render) {
       context = create_headless_gl_context();
-      renderer = std::make_unique<SkeletonRenderer>(o.width, o.height);
+      renderer = std::make_unique<CrowdRenderer>(o.width, o.height);
       renderer->options().draw_skeleton = !bodies;
     }
     // A rolling window and no trace: the profiler itself must not grow with the run.

@@ -6,7 +6,7 @@
 #include <glm/vec3.hpp>
 
 #include "render/camera.h"
-#include "render/skeleton_renderer.h"
+#include "render/body_source.h"
 #include "scene/crowd_scene.h"
 
 namespace strata {

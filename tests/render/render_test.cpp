@@ -27,7 +27,7 @@
 #include "render/camera.h"
 #include "render/gl_context.h"
 #include "render/gl_context_glfw.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 
 namespace strata {
 namespace {
@@ -96,7 +96,7 @@ struct Rect {
 // f * R / (z - R) pixels on the axis (f = focal length in pixels); off-axis it stretches by 1 / cos^2 of the
 // angle, under 1.3 in these views, so twice that plus 2 pixels of rasterisation/MSAA coverage is safe.
 Rect projected_bounds(const std::vector<glm::vec3>& joints, const glm::mat4& view, const glm::mat4& projection,
-                      const SkeletonRenderOptions& options) {
+                      const RenderOptions& options) {
   const float radius = std::max(options.bone_radius, options.joint_radius);
   const float focal_pixels = projection[1][1] * 0.5f * kHeight;
   Rect r;
@@ -133,7 +133,7 @@ class RenderTest : public ::testing::Test {
       FAIL() << "headless GL context unavailable (CI has Mesa, so this is a failure): " << e.what();
     }
     options_.draw_ground = false;
-    renderer_ = std::make_unique<SkeletonRenderer>(kWidth, kHeight, options_);
+    renderer_ = std::make_unique<CrowdRenderer>(kWidth, kHeight, options_);
     background_ = render_background();
   }
 
@@ -200,8 +200,8 @@ class RenderTest : public ::testing::Test {
   }
 
   std::unique_ptr<GlContext> context_;
-  SkeletonRenderOptions options_;
-  std::unique_ptr<SkeletonRenderer> renderer_;
+  RenderOptions options_;
+  std::unique_ptr<CrowdRenderer> renderer_;
   Skeleton skeleton_ = make_stick_figure();
   Rgba background_{};
 };
@@ -355,7 +355,7 @@ TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
   std::vector<std::uint8_t> image;
   renderer_->read_rgba(image);
   const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
-  SkeletonRenderOptions no_margin = options_;
+  RenderOptions no_margin = options_;
   no_margin.bone_radius = no_margin.joint_radius = 0.0f;
   const Rect a = projected_bounds({positions.begin(), positions.begin() + 24}, view, projection, no_margin);
   const Rect b = projected_bounds({positions.begin() + 24, positions.end()}, view, projection, no_margin);
@@ -422,9 +422,9 @@ TEST_F(RenderTest, SameInputGivesIdenticalPixels) {
   const std::vector<std::uint8_t> second = render(skeleton_.centers, 1, camera);
   EXPECT_TRUE(first == second);
 
-  SkeletonRenderOptions options = options_;
+  RenderOptions options = options_;
   options.draw_ground = true;
-  SkeletonRenderer fresh(kWidth, kHeight, options);
+  CrowdRenderer fresh(kWidth, kHeight, options);
   SkeletonDrawInput input{&skeleton_, skeleton_.centers, 1};
   fresh.render(input, camera.view(), camera.projection(kAspect));
   std::vector<std::uint8_t> third;
@@ -647,7 +647,7 @@ TEST(GlfwWindow, HiddenWindowRendersAndBlits) {
   EXPECT_TRUE(major > 4 || (major == 4 && minor >= 5)) << version;
   const glm::ivec2 fb = window.framebuffer_size();
   ASSERT_GT(fb.x, 0);
-  SkeletonRenderer renderer(fb.x, fb.y);
+  CrowdRenderer renderer(fb.x, fb.y);
   const Skeleton skeleton = make_stick_figure();
   SkeletonDrawInput input{&skeleton, skeleton.centers, 1};
   const OrbitCamera camera = figure_camera();
@@ -712,7 +712,7 @@ TEST_F(PngTest, WritesARenderedFrame) {
   } catch (const std::exception& e) {
     FAIL() << e.what();
   }
-  SkeletonRenderer renderer(kWidth, kHeight);
+  CrowdRenderer renderer(kWidth, kHeight);
   const Skeleton skeleton = make_stick_figure();
   const OrbitCamera camera = figure_camera();
   renderer.render({&skeleton, skeleton.centers, 1}, camera.view(), camera.projection(kAspect));
