@@ -9,6 +9,7 @@
 #include "render/ground_pass.h"
 #include "render/reference_pass.h"
 #include "render/render_target.h"
+#include "render/skeleton_pass.h"
 
 namespace strata {
 

@@ -21,7 +21,7 @@
 
 #include "render/body_source.h"
 #include "render/render_options.h"
-#include "render/skeleton_pass.h"
+#include "render/skeleton_input.h"
 
 namespace strata {
 
@@ -70,8 +70,8 @@ class CrowdRenderer {
   void blit_to_default_framebuffer(int width, int height) const;
 
  private:
-  // The passes live behind a pointer so that callers (the commands, the viewer) include none of their headers'
-  // GL-object members and do not rebuild when a pass changes.
+  // The passes live behind a pointer: callers (the commands, the viewer) see only what they hand in (the inputs,
+  // the options), so a pass's members can change without rebuilding them.
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -2,34 +2,18 @@
 // The skeleton pass: every bone of every walker as a lit tapered prism and every joint as a small lit sphere, in
 // two instanced draws (one for all bones, one for all joints). Drawn inside the bodies when both are on; on its
 // own it is the crowd at level -1 and the debugging view of a rig.
-#include <cstddef>
-#include <span>
 #include <vector>
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
-#include "components/skeleton.h"
 #include "render/gl_program.h"
 #include "render/render_options.h"
 #include "render/skeleton_geometry.h"
+#include "render/skeleton_input.h"
 
 namespace strata {
-
-struct SkeletonDrawInput {
-  const Skeleton* skeleton = nullptr;
-  // World-space joint positions, walker-major: joint j of walker w at [w * joint_count + j].
-  std::span<const glm::vec3> joint_positions;
-  std::size_t walker_count = 0;
-};
-
-// Throws std::invalid_argument when `input` has walkers but no skeleton, a skeleton whose parents disagree with
-// its joint count, or fewer joint positions than walkers x joints. Every pass that reads the joints relies on it.
-void check_skeleton_input(const SkeletonDrawInput& input);
-
-// The joint positions an input really holds: walker_count x joint_count of them (none without a skeleton).
-std::span<const glm::vec3> drawn_joint_positions(const SkeletonDrawInput& input);
 
 class SkeletonPass {
  public:

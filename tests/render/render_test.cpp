@@ -33,6 +33,7 @@
 #include "render/gl_context_glfw.h"
 #include "render/gl_program.h"
 #include "render/ground_pass.h"
+#include "render/skeleton_geometry.h"
 
 namespace strata {
 namespace {
