@@ -17,17 +17,19 @@
 //      fragment stage stays lit.frag, so every kind shades alike) and the GL objects the kind needs, and a
 //      check in BodyPass::check so a malformed batch throws before the frame starts.
 //   3. Write a BodySource that produces the batches (e.g. in render/scene_draw.cpp, from the CrowdScene).
-// A GPU-skinned batch would carry: the rest layout (components/skin_layout.h SkinLayout: rest positions, normals,
-// per-group joints and weights, the triangles), which the pass uploads once and keys by address, as it keys index
-// buffers by the triangle list today; and per walker its skinning matrices (the walker table's `skinning` field,
-// 3x4 per joint, walker-major) and its placement, streamed every frame into a shader storage buffer that the
-// vertex shader blends from. The systems already compute the matrices; the scene would skip the skin system for
-// those walkers. An impostor batch would carry per walker a position, a heading and an atlas frame (and, once,
-// the atlas image); the pass draws one camera-facing quad per walker with its own program.
+// A GPU-skinned batch would carry the rest layout (components/skin_layout.h SkinLayout: rest positions and
+// normals, each group's joints and weights, the triangles, and the muscle coefficients of a body with muscles),
+// which the pass uploads once and keys by address as it keys index buffers by triangle list today; and, every
+// frame, the walkers' skinning matrices (the walker table's `skinning` field, F(j) A(j)^-1, 12 floats per joint),
+// placements and muscle forces, streamed into shader storage buffers for a vertex shader that blends them. The
+// systems already compute all of these; only the scene would skip the skin system for those walkers. An impostor
+// batch would carry per walker a position, a heading and an atlas frame (and, once, the atlas image); the pass
+// draws one camera-facing quad per walker with its own program.
 //
-// Costs: one virtual call per batch (batch_count and batch), never per walker or per vertex; a batch is a few
-// pointers and sizes copied by value. The rejected alternative, a virtual "draw yourself" on the source, would
-// put GL calls in every source and spread the pass's state (VAOs, cached index buffers) across them.
+// Costs: virtual calls per batch (the pass asks for each batch twice a frame, to check it and to draw it), never
+// per walker or per vertex; a batch is a few pointers and sizes, copied by value. The rejected alternative, a
+// virtual "draw yourself" on the source, would put GL calls in every source and spread the pass's state (VAOs,
+// cached index buffers) across them.
 #include <cstddef>
 #include <cstdint>
 #include <span>

@@ -3,7 +3,6 @@
 #include <epoxy/gl.h>
 
 #include <optional>
-#include <stdexcept>
 
 #include "render/body_pass.h"
 #include "render/ground_pass.h"
@@ -50,6 +49,9 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
 void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
                            const BodySource& bodies) {
   Impl& r = *impl_;
+  // Every input is checked before the frame starts, so a bad one throws with the last image intact. Then ground,
+  // skeletons, bodies: the order the single-file renderer drew in, which the frames' bytes depend on where
+  // depth ties (a joint sphere and a body surface at the same depth keep whichever came first, GL_LESS).
   r.body.check(bodies);
   check_skeleton_input(input);
   const RenderOptions& o = r.options;
@@ -58,7 +60,7 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
   if (o.draw_skeleton) r.skeleton.draw(input, view, projection, o);
   r.body.draw(bodies, view, projection, o.skin_color);
   r.triangles_drawn = r.body.triangles_drawn();
-  glBindVertexArray(0);
+  glBindVertexArray(0);  // no VAO of ours stays bound for GL the caller draws next (the viewer's panel)
   r.target.resolve();
 }
 

@@ -30,7 +30,8 @@ class ReferencePass {
   ReferencePass();
 
   // Walker 0 of `mesh` (uploaded when its topology differs from the last one's) and the per-copy offsets (every
-  // call). Throws std::invalid_argument for a mesh without vertices or triangles, or with an index out of range.
+  // call). Throws std::invalid_argument for a mesh without vertices, a triangle list whose length is not a
+  // multiple of 3, or an index out of range.
   void upload(const BodyDrawInput& mesh, std::span<const glm::vec3> offsets);
   // Draws the uploaded mesh once per offset into the bound framebuffer; returns the triangles submitted.
   std::size_t draw(const glm::mat4& view, const glm::mat4& projection, const glm::vec3& skin_color);

@@ -18,7 +18,8 @@ class RenderTarget {
 
   int width() const { return width_; }
   int height() const { return height_; }
-  // New storage at the new size (nothing when the size is unchanged); on failure the old target stays.
+  // New storage at the new size (nothing when the size is unchanged). It is made before the old is freed, briefly
+  // holding both, so a failed resize leaves the old target working; freeing first would leave none.
   void resize(int width, int height);
 
   // Binds the multisampled framebuffer, sets every piece of state a frame depends on (the caller, or a GUI, may

@@ -513,7 +513,8 @@ TEST_F(RenderTest, EveryBodyOverloadDrawsTheSamePixels) {
     renderer_->render(SkeletonDrawInput{}, view, projection, std::span<const BodyDrawInput>(&bodies, 1));
   });
   const auto by_source = frame([&] {
-    renderer_->render(SkeletonDrawInput{}, view, projection, CpuSkinnedBodies(std::span<const BodyDrawInput>(&bodies, 1)));
+    const CpuSkinnedBodies source(std::span<const BodyDrawInput>(&bodies, 1));
+    renderer_->render(SkeletonDrawInput{}, view, projection, source);
   });
   // The same two walkers as two batches of one walker each (walker 1's block starts `stride` floats later).
   BodyDrawInput first = bodies, second = bodies;
@@ -616,8 +617,9 @@ TEST(Shaders, CompileAndLinkErrorsNameTheShaderFiles) {
   const std::string_view vert = shader_source("render/shaders/body.vert");
   const std::string_view frag = shader_source("render/shaders/lit.frag");
   EXPECT_NO_THROW(link_program("render/shaders/body.vert", vert, "render/shaders/lit.frag", frag));
-  const std::string broken_vert = message(
-      [&] { link_program("render/shaders/broken.vert", "#version 450 core\nvoid main() { oops }\n", "lit.frag", frag); });
+  const std::string broken_vert = message([&] {
+    link_program("render/shaders/broken.vert", "#version 450 core\nvoid main() { oops }\n", "lit.frag", frag);
+  });
   EXPECT_EQ(broken_vert.rfind("render/shaders/broken.vert: failed to compile: ", 0), 0u) << broken_vert;
   const std::string broken_frag = message(
       [&] { link_program("body.vert", vert, "render/shaders/broken.frag", "#version 450 core\nvoid main() {\n"); });
