@@ -16,7 +16,7 @@
 #include "render/scene_draw.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "scene/step.h"
 
 namespace strata::cli {
@@ -36,7 +36,7 @@ struct BenchOptions {
 // walker at its position. Same target, material and camera; ground and skeletons off; each timed to glFinish.
 nlohmann::json render_bench(Crowd& scene, const BenchOptions& o) {
   auto context = create_headless_gl_context();
-  SkeletonRenderer renderer(o.width, o.height);
+  CrowdRenderer renderer(o.width, o.height);
   renderer.options().draw_ground = false;
   renderer.options().draw_skeleton = false;
   const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);

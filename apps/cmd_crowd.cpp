@@ -21,7 +21,7 @@
 #include "render/camera.h"
 #include "systems/animation_sample.h"
 #include "render/gl_context.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "scene/crowd.h"
 #include "systems/pose_gather.h"
 #include "scene/state_hash.h"
@@ -101,7 +101,7 @@ int run_crowd(const CrowdOptions& o) {
 
   try {
     auto context = create_headless_gl_context();
-    SkeletonRenderer renderer(o.width, o.height);
+    CrowdRenderer renderer(o.width, o.height);
     const bool bodies = !scene.skin.level.is_none();
     RenderScratch scratch;
     RenderFrameOptions draw;

@@ -21,7 +21,7 @@
 #include "profiling/profiler.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "systems/pose_gather.h"
 #include "scene/step.h"
 
@@ -66,13 +66,13 @@ int run_soak(const SoakOptions& o) {
   try {
     std::unique_ptr<Crowd> scene = build_scene(o.scene);
     std::unique_ptr<GlContext> context;
-    std::unique_ptr<SkeletonRenderer> renderer;
+    std::unique_ptr<CrowdRenderer> renderer;
     OrbitCamera camera;
     RenderScratch scratch;
     std::vector<std::uint8_t> pixels;
     if (o.render) {
       context = create_headless_gl_context();
-      renderer = std::make_unique<SkeletonRenderer>(o.width, o.height);
+      renderer = std::make_unique<CrowdRenderer>(o.width, o.height);
     }
     // A rolling window and no trace: the profiler itself must not grow with the run.
     Profiler profiler(120, false);

@@ -24,7 +24,7 @@
 #include "render/camera.h"
 #include "render/gl_context.h"
 #include "render/gl_context_glfw.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "scene/crowd.h"
 #include "systems/pose_gather.h"
 #include "ui/imgui_layer.h"
@@ -62,7 +62,7 @@ std::string timing_title(const Profiler& profiler, double fps) {
 
 // Draws the session's scene from `camera` (bodies in the binding editor's colours while it runs) and hands the
 // camera to culling and --level auto for the next frame (render_frame, the render half of every command's frame).
-void render_scene(ViewSession& session, SkeletonRenderer& renderer, const OrbitCamera& camera, float aspect,
+void render_scene(ViewSession& session, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
                   int viewport_height, RenderScratch& scratch) {
   ViewPanelState& panel = session.panel();
   RenderFrameOptions options;
@@ -98,7 +98,7 @@ int run_view_headless(const ViewOptions& o) {
     ViewSession session(o.scene);
     apply_start_options(o, session);
     std::unique_ptr<GlContext> context = create_headless_gl_context();
-    SkeletonRenderer renderer(o.width, o.height);
+    CrowdRenderer renderer(o.width, o.height);
     std::optional<ImGuiLayer> ui;
     if (!o.no_panel) ui.emplace();
     Profiler profiler(120, false);
@@ -160,7 +160,7 @@ int run_view(const ViewOptions& o) {
     wo.visible = !o.hidden;
     GlfwWindow window(wo);
     glm::ivec2 fb = window.framebuffer_size();
-    SkeletonRenderer renderer(fb.x, fb.y);
+    CrowdRenderer renderer(fb.x, fb.y);
     // The panel attaches to the window's callbacks; --no-panel leaves the scene alone on screen.
     std::optional<ImGuiLayer> ui;
     if (!o.no_panel) ui.emplace(window.native_handle());

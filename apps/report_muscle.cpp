@@ -19,7 +19,7 @@
 #include "io/image_writer.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "systems/fk.h"
 #include "systems/muscle.h"
 #include "systems/pose_gather.h"
@@ -169,7 +169,7 @@ double kernel_vs_reference(PosedWalker& walker) {
 void write_figure(PosedWalker& walker, const std::filesystem::path& dir) {
   constexpr int kPanel = 480;
   auto context = create_headless_gl_context();
-  SkeletonRenderer renderer(kPanel, kPanel);
+  CrowdRenderer renderer(kPanel, kPanel);
   renderer.options().draw_skeleton = false;
   renderer.options().draw_ground = false;
   Crowd& scene = walker.scene();

@@ -86,7 +86,7 @@ bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderSc
   return any;
 }
 
-std::size_t render_frame(Crowd& crowd, SkeletonRenderer& renderer, const OrbitCamera& camera, float aspect,
+std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
                          int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options) {
   gather_crowd_joints(crowd, scratch.joints);
   std::vector<BodyDrawInput> bodies = body_draw_inputs(crowd);

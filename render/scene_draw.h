@@ -13,7 +13,7 @@
 #include <glm/vec3.hpp>
 
 #include "render/camera.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "scene/crowd.h"
 
 namespace strata {
@@ -50,7 +50,7 @@ struct RenderFrameOptions {
 
 // Draws the crowd's last step from `camera` into `renderer`'s target (aspect = width / height of the target,
 // viewport_height its pixel height), then set_crowd_camera(). Returns the body triangles drawn.
-std::size_t render_frame(Crowd& crowd, SkeletonRenderer& renderer, const OrbitCamera& camera, float aspect,
+std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
                          int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options = {});
 
 }  // namespace strata

@@ -13,8 +13,10 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -24,10 +26,14 @@
 
 #include "components/skeleton.h"
 #include "io/image_writer.h"
+#include "render/body_pass.h"
 #include "render/camera.h"
+#include "render/crowd_renderer.h"
 #include "render/gl_context.h"
 #include "render/gl_context_glfw.h"
-#include "render/skeleton_renderer.h"
+#include "render/gl_program.h"
+#include "render/ground_pass.h"
+#include "render/skeleton_geometry.h"
 
 namespace strata {
 namespace {
@@ -96,7 +102,7 @@ struct Rect {
 // f * R / (z - R) pixels on the axis (f = focal length in pixels); off-axis it stretches by 1 / cos^2 of the
 // angle, under 1.3 in these views, so twice that plus 2 pixels of rasterisation/MSAA coverage is safe.
 Rect projected_bounds(const std::vector<glm::vec3>& joints, const glm::mat4& view, const glm::mat4& projection,
-                      const SkeletonRenderOptions& options) {
+                      const RenderOptions& options) {
   const float radius = std::max(options.bone_radius, options.joint_radius);
   const float focal_pixels = projection[1][1] * 0.5f * kHeight;
   Rect r;
@@ -133,7 +139,7 @@ class RenderTest : public ::testing::Test {
       FAIL() << "headless GL context unavailable (CI has Mesa, so this is a failure): " << e.what();
     }
     options_.draw_ground = false;
-    renderer_ = std::make_unique<SkeletonRenderer>(kWidth, kHeight, options_);
+    renderer_ = std::make_unique<CrowdRenderer>(kWidth, kHeight, options_);
     background_ = render_background();
   }
 
@@ -200,8 +206,8 @@ class RenderTest : public ::testing::Test {
   }
 
   std::unique_ptr<GlContext> context_;
-  SkeletonRenderOptions options_;
-  std::unique_ptr<SkeletonRenderer> renderer_;
+  RenderOptions options_;
+  std::unique_ptr<CrowdRenderer> renderer_;
   Skeleton skeleton_ = make_stick_figure();
   Rgba background_{};
 };
@@ -355,7 +361,7 @@ TEST_F(RenderTest, BodiesAreDrawnWhereTheyProjectAndNowhereElse) {
   std::vector<std::uint8_t> image;
   renderer_->read_rgba(image);
   const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
-  SkeletonRenderOptions no_margin = options_;
+  RenderOptions no_margin = options_;
   no_margin.bone_radius = no_margin.joint_radius = 0.0f;
   const Rect a = projected_bounds({positions.begin(), positions.begin() + 24}, view, projection, no_margin);
   const Rect b = projected_bounds({positions.begin() + 24, positions.end()}, view, projection, no_margin);
@@ -422,9 +428,9 @@ TEST_F(RenderTest, SameInputGivesIdenticalPixels) {
   const std::vector<std::uint8_t> second = render(skeleton_.centers, 1, camera);
   EXPECT_TRUE(first == second);
 
-  SkeletonRenderOptions options = options_;
+  RenderOptions options = options_;
   options.draw_ground = true;
-  SkeletonRenderer fresh(kWidth, kHeight, options);
+  CrowdRenderer fresh(kWidth, kHeight, options);
   SkeletonDrawInput input{&skeleton_, skeleton_.centers, 1};
   fresh.render(input, camera.view(), camera.projection(kAspect));
   std::vector<std::uint8_t> third;
@@ -474,6 +480,157 @@ TEST_F(RenderTest, ResizeChangesTheImageSize) {
   std::vector<std::uint8_t> image;
   renderer_->read_rgba(image);
   EXPECT_EQ(image.size(), 64u * 32u * 4u);
+}
+
+// ---- body sources, the reference pass, shaders ------------------------------------------------------------
+
+// A source other than CpuSkinnedBodies: the renderer must draw whatever a BodySource hands out, batch by batch.
+class ListedBodies final : public BodySource {
+ public:
+  explicit ListedBodies(std::vector<BodyDrawInput> batches) : batches_(std::move(batches)) {}
+  std::size_t batch_count() const override { return batches_.size(); }
+  BodyBatch batch(std::size_t index) const override { return batches_[index]; }
+
+ private:
+  std::vector<BodyDrawInput> batches_;
+};
+
+TEST_F(RenderTest, EveryBodyOverloadDrawsTheSamePixels) {
+  const TwoBoxBodies boxes;
+  renderer_->options().draw_skeleton = false;
+  const OrbitCamera camera = figure_camera();
+  const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
+  const BodyDrawInput bodies = boxes.input();
+  const auto frame = [&](auto&& draw) {
+    draw();
+    std::vector<std::uint8_t> image;
+    renderer_->read_rgba(image);
+    return image;
+  };
+  const auto by_pointer = frame([&] { renderer_->render(SkeletonDrawInput{}, view, projection, &bodies); });
+  EXPECT_EQ(renderer_->triangles_drawn(), 2u * 12u);
+  const auto by_span = frame([&] {
+    renderer_->render(SkeletonDrawInput{}, view, projection, std::span<const BodyDrawInput>(&bodies, 1));
+  });
+  const auto by_source = frame([&] {
+    const CpuSkinnedBodies source(std::span<const BodyDrawInput>(&bodies, 1));
+    renderer_->render(SkeletonDrawInput{}, view, projection, source);
+  });
+  // The same two walkers as two batches of one walker each (walker 1's block starts `stride` floats later).
+  BodyDrawInput first = bodies, second = bodies;
+  first.walker_count = second.walker_count = 1;
+  for (const float** a : {&second.px, &second.py, &second.pz, &second.nx, &second.ny, &second.nz}) *a += bodies.stride;
+  const auto by_batches = frame([&] {
+    renderer_->render(SkeletonDrawInput{}, view, projection, ListedBodies({first, second}));
+  });
+  EXPECT_EQ(renderer_->triangles_drawn(), 2u * 12u);
+  EXPECT_TRUE(by_pointer == by_span);
+  EXPECT_TRUE(by_pointer == by_source);
+  EXPECT_TRUE(by_pointer == by_batches);
+  EXPECT_FALSE(by_pointer == frame([&] { renderer_->render(SkeletonDrawInput{}, view, projection); }));
+}
+
+TEST_F(RenderTest, MoreBodyBatchesThanSlotsAreRejectedBeforeDrawing) {
+  const TwoBoxBodies boxes;
+  const OrbitCamera camera = figure_camera();
+  const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
+  const std::vector<BodyDrawInput> four(BodyPass::kMaxBatches, boxes.input());
+  renderer_->render(SkeletonDrawInput{}, view, projection, four);
+  EXPECT_EQ(renderer_->triangles_drawn(), 4u * 2u * 12u);
+  std::vector<std::uint8_t> before, after;
+  renderer_->read_rgba(before);
+  const std::vector<BodyDrawInput> five(BodyPass::kMaxBatches + 1, boxes.input());
+  const std::vector<glm::vec3> figure = skeleton_.centers;
+  EXPECT_THROW(renderer_->render(SkeletonDrawInput{&skeleton_, figure, 1}, view, projection, five),
+               std::invalid_argument);
+  renderer_->read_rgba(after);
+  EXPECT_TRUE(before == after) << "a rejected frame must leave the last image as it was";
+}
+
+// The benchmark's reference draws walker 0's mesh at each offset with the body pass's shaders and material: one
+// copy at offset zero is exactly the body pass drawing walker 0 alone.
+TEST_F(RenderTest, InstancedReferenceAtOffsetZeroMatchesTheBodyPass) {
+  const TwoBoxBodies boxes;
+  renderer_->options().draw_skeleton = false;
+  const OrbitCamera camera = figure_camera();
+  const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
+  BodyDrawInput walker0 = boxes.input();
+  walker0.walker_count = 1;
+  renderer_->render(SkeletonDrawInput{}, view, projection, &walker0);
+  std::vector<std::uint8_t> body, reference, moved;
+  renderer_->read_rgba(body);
+  const std::vector<glm::vec3> at_origin{glm::vec3(0.0f)};
+  renderer_->render_instanced_reference(boxes.input(), at_origin, view, projection);
+  EXPECT_EQ(renderer_->triangles_drawn(), 12u);
+  renderer_->read_rgba(reference);
+  EXPECT_TRUE(body == reference);
+  const std::vector<glm::vec3> two{glm::vec3(0.0f), glm::vec3(0.9f, 0.0f, 0.0f)};
+  renderer_->render_instanced_reference(boxes.input(), two, view, projection);
+  EXPECT_EQ(renderer_->triangles_drawn(), 24u);
+  renderer_->read_rgba(moved);
+  EXPECT_FALSE(moved == reference);
+  BodyDrawInput none;
+  EXPECT_THROW(renderer_->render_instanced_reference(none, two, view, projection), std::invalid_argument);
+}
+
+TEST(GroundExtent, CentresUnderThePointsAndReachesPastThem) {
+  const GroundExtent empty = ground_extent({});
+  EXPECT_EQ(empty.center, glm::vec2(0.0f));
+  EXPECT_EQ(empty.half_size, 25.0f);
+  const float nan = std::nanf("");
+  const std::vector<glm::vec3> points{{-40.0f, 1.0f, 2.0f}, {40.0f, 0.0f, 6.0f}, {nan, 0.0f, 100.0f}};
+  const GroundExtent e = ground_extent(points);
+  EXPECT_EQ(e.center, glm::vec2(0.0f, 4.0f));
+  EXPECT_EQ(e.half_size, 55.0f);  // half the 80 m spread plus 15 m
+}
+
+// Every shader the passes load is embedded in the library (the program runs with no file beside it).
+TEST(Shaders, EveryPassShaderIsEmbedded) {
+  for (const char* path : {"render/shaders/skeleton.vert", "render/shaders/lit.frag", "render/shaders/body.vert",
+                           "render/shaders/ground.vert", "render/shaders/ground.frag"}) {
+    const std::string_view text = shader_source(path);
+    EXPECT_EQ(text.substr(0, 17), "#version 450 core") << path;
+  }
+  try {
+    (void)shader_source("render/shaders/missing.vert");
+    FAIL() << "expected an exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("render/shaders/missing.vert"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Shaders, CompileAndLinkErrorsNameTheShaderFiles) {
+  std::unique_ptr<GlContext> context;
+  try {
+    context = create_headless_gl_context();
+  } catch (const std::exception& e) {
+    FAIL() << e.what();
+  }
+  const auto message = [](auto&& link) {
+    try {
+      link();
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  const std::string_view vert = shader_source("render/shaders/body.vert");
+  const std::string_view frag = shader_source("render/shaders/lit.frag");
+  EXPECT_NO_THROW(link_program("render/shaders/body.vert", vert, "render/shaders/lit.frag", frag));
+  const std::string broken_vert = message([&] {
+    link_program("render/shaders/broken.vert", "#version 450 core\nvoid main() { oops }\n", "lit.frag", frag);
+  });
+  EXPECT_EQ(broken_vert.rfind("render/shaders/broken.vert: failed to compile: ", 0), 0u) << broken_vert;
+  const std::string broken_frag = message(
+      [&] { link_program("body.vert", vert, "render/shaders/broken.frag", "#version 450 core\nvoid main() {\n"); });
+  EXPECT_EQ(broken_frag.rfind("render/shaders/broken.frag: failed to compile: ", 0), 0u) << broken_frag;
+  // Each stage compiles alone; the fragment stage reads an input no vertex stage writes, which only the link sees.
+  const std::string unlinked = message([&] {
+    link_program("render/shaders/a.vert", "#version 450 core\nvoid main() { gl_Position = vec4(0.0); }\n",
+                 "render/shaders/b.frag",
+                 "#version 450 core\nin vec3 v_missing;\nout vec4 f;\nvoid main() { f = vec4(v_missing, 1.0); }\n");
+  });
+  EXPECT_EQ(unlinked.rfind("render/shaders/a.vert + render/shaders/b.frag: failed to link: ", 0), 0u) << unlinked;
 }
 
 // ---- bone_transform ---------------------------------------------------------------------------------------
@@ -647,7 +804,7 @@ TEST(GlfwWindow, HiddenWindowRendersAndBlits) {
   EXPECT_TRUE(major > 4 || (major == 4 && minor >= 5)) << version;
   const glm::ivec2 fb = window.framebuffer_size();
   ASSERT_GT(fb.x, 0);
-  SkeletonRenderer renderer(fb.x, fb.y);
+  CrowdRenderer renderer(fb.x, fb.y);
   const Skeleton skeleton = make_stick_figure();
   SkeletonDrawInput input{&skeleton, skeleton.centers, 1};
   const OrbitCamera camera = figure_camera();
@@ -712,7 +869,7 @@ TEST_F(PngTest, WritesARenderedFrame) {
   } catch (const std::exception& e) {
     FAIL() << e.what();
   }
-  SkeletonRenderer renderer(kWidth, kHeight);
+  CrowdRenderer renderer(kWidth, kHeight);
   const Skeleton skeleton = make_stick_figure();
   const OrbitCamera camera = figure_camera();
   renderer.render({&skeleton, skeleton.centers, 1}, camera.view(), camera.projection(kAspect));

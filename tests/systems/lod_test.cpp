@@ -9,7 +9,7 @@
 #include "render/scene_draw.h"
 #include "io/hanim_loader.h"
 #include "render/gl_context.h"
-#include "render/skeleton_renderer.h"
+#include "render/crowd_renderer.h"
 #include "rig/body_rig.h"
 #include "systems/animation_sample.h"
 #include "scene/crowd.h"
@@ -192,7 +192,7 @@ class LodRenderTest : public ::testing::Test {
 
 // Forcing each level draws walkers x that level's triangles; auto draws each walker's own level's.
 TEST_F(LodRenderTest, DrawnTriangleCountFollowsTheLevels) {
-  SkeletonRenderer renderer(160, 160);
+  CrowdRenderer renderer(160, 160);
   Profiler profiler(4, false);
   const glm::mat4 projection = glm::perspective(glm::radians(60.0f), 1.0f, 0.1f, 500.0f);
   const glm::mat4 view = glm::lookAt(glm::vec3(0, 1, 0), glm::vec3(0, 1, -1), glm::vec3(0, 1, 0));

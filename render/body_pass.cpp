@@ -1,0 +1,110 @@
+#include "render/body_pass.h"
+
+#include <epoxy/gl.h>
+
+#include <stdexcept>
+#include <string>
+#include <variant>
+
+#include <glm/gtc/type_ptr.hpp>
+
+namespace strata {
+
+namespace {
+
+// std::visit over a BodyBatch with one lambda per kind. No catch-all (auto) overload: a new kind must be handled.
+template <class... F>
+struct Overloads : F... {
+  using F::operator()...;
+};
+template <class... F>
+Overloads(F...) -> Overloads<F...>;
+
+}  // namespace
+
+BodyPass::BodyPass()
+    : program_(link_program("render/shaders/body.vert", "render/shaders/lit.frag")),
+      vao_(GlKind::kVertexArray),
+      components_(GlKind::kBuffer),
+      colors_(GlKind::kBuffer) {
+  const GLuint vao = vao_.id();
+  for (GLuint a = 0; a < 6; ++a) {
+    glEnableVertexArrayAttrib(vao, a);
+    glVertexArrayAttribFormat(vao, a, 1, GL_FLOAT, GL_FALSE, 0);
+    glVertexArrayAttribBinding(vao, a, a);
+  }
+  // Attribute 6 (the reference's per-instance offset) stays disabled: GL supplies (0, 0, 0). Attribute 7, the
+  // colours, is enabled only for batches that have them.
+  glVertexArrayAttribFormat(vao, 7, 4, GL_UNSIGNED_BYTE, GL_TRUE, 0);
+  glVertexArrayAttribBinding(vao, 7, 7);
+}
+
+void BodyPass::check(const BodySource& bodies) const {
+  const std::size_t n = bodies.batch_count();
+  if (n > kMaxBatches)
+    throw std::invalid_argument("crowd renderer: at most " + std::to_string(kMaxBatches) + " body levels per frame");
+  for (std::size_t k = 0; k < n; ++k)
+    std::visit(Overloads{[&](const BodyDrawInput& b) { check_batch(b, slots_[k]); }}, bodies.batch(k));
+}
+
+void BodyPass::check_batch(const BodyDrawInput& b, const TopologyBuffer& slot) const {
+  if (b.walker_count == 0) return;
+  if (!b.px || !b.py || !b.pz || !b.nx || !b.ny || !b.nz || b.stride < b.vertex_count || b.triangles.size() % 3 != 0)
+    throw std::invalid_argument("crowd renderer: body arrays/triangles do not describe " +
+                                std::to_string(b.walker_count) + " walkers of " + std::to_string(b.vertex_count) +
+                                " vertices");
+  if (!slot.holds(b.triangles, b.vertex_count))
+    for (std::uint32_t index : b.triangles)
+      if (index >= b.vertex_count)
+        throw std::invalid_argument("crowd renderer: body triangle index " + std::to_string(index) + " out of range");
+}
+
+void BodyPass::draw(const BodySource& bodies, const glm::mat4& view, const glm::mat4& projection,
+                    const glm::vec3& skin_color) {
+  triangles_drawn_ = 0;
+  const std::size_t n = bodies.batch_count();
+  for (std::size_t k = 0; k < n; ++k)
+    std::visit(Overloads{[&](const BodyDrawInput& b) { draw_batch(b, slots_[k], view, projection, skin_color); }},
+               bodies.batch(k));
+}
+
+void BodyPass::draw_batch(const BodyDrawInput& b, TopologyBuffer& slot, const glm::mat4& view,
+                          const glm::mat4& projection, const glm::vec3& skin_color) {
+  if (b.walker_count == 0 || b.triangles.empty()) return;
+  if (!slot.holds(b.triangles, b.vertex_count)) slot.upload(b.triangles, b.vertex_count, optimized_);
+  const GLuint vao = vao_.id();
+  glVertexArrayElementBuffer(vao, slot.id());
+  const std::size_t floats = b.walker_count * b.stride;
+  const GLsizeiptr bytes = static_cast<GLsizeiptr>(floats * sizeof(float));
+  glNamedBufferData(components_.id(), 6 * bytes, nullptr, GL_STREAM_DRAW);
+  const float* arrays[6] = {b.px, b.py, b.pz, b.nx, b.ny, b.nz};
+  for (GLuint a = 0; a < 6; ++a) {
+    glNamedBufferSubData(components_.id(), a * bytes, bytes, arrays[a]);
+    glVertexArrayVertexBuffer(vao, a, components_.id(), a * bytes, sizeof(float));
+  }
+  if (b.rgba) {
+    glNamedBufferData(colors_.id(), static_cast<GLsizeiptr>(floats * sizeof(std::uint32_t)), b.rgba, GL_STREAM_DRAW);
+    glVertexArrayVertexBuffer(vao, 7, colors_.id(), 0, sizeof(std::uint32_t));
+    glEnableVertexArrayAttrib(vao, 7);
+  } else {
+    // The generic value is context state, not the VAO's: set it every time, or the last tint would stick.
+    glDisableVertexArrayAttrib(vao, 7);
+    glVertexAttrib4f(7, 0.0f, 0.0f, 0.0f, 0.0f);
+  }
+  // One multi-draw: the shared index list once per walker, offset by its first vertex.
+  counts_.assign(b.walker_count, static_cast<GLsizei>(b.triangles.size()));
+  offsets_.assign(b.walker_count, nullptr);
+  base_vertices_.resize(b.walker_count);
+  for (std::size_t w = 0; w < b.walker_count; ++w) base_vertices_[w] = static_cast<GLint>(w * b.stride);
+  const GLuint p = program_.id();
+  glUseProgram(p);
+  glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));
+  glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));
+  glProgramUniform3fv(p, glGetUniformLocation(p, "u_color"), 1, glm::value_ptr(skin_color));
+  glBindVertexArray(vao);
+  glMultiDrawElementsBaseVertex(GL_TRIANGLES, counts_.data(), GL_UNSIGNED_INT, offsets_.data(),
+                                static_cast<GLsizei>(b.walker_count), base_vertices_.data());
+  triangles_drawn_ += b.walker_count * (b.triangles.size() / 3);
+}
+
+}  // namespace strata

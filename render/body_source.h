@@ -1,0 +1,78 @@
+#pragma once
+// What the body pass draws, as the renderer's one seam with whatever produces bodies. The pass reads a BodySource:
+// a handful of batches per frame (one per body level in use), each a BodyBatch whose alternative says what it
+// carries and therefore how the pass draws it. The pass never sees the scene, the systems or raw arrays passed
+// alongside; the systems never see GL.
+//
+// Today there is one kind of batch, BodyDrawInput: bodies skinned on the CPU (the skin system's output), six
+// world-space SoA streams the pass uploads every frame and draws with one multi-draw per batch. CpuSkinnedBodies
+// is the source of those, wrapping the inputs render/scene_draw.h builds from a CrowdScene.
+//
+// Adding a kind (the body pass is the one pass that changes; the systems, the skeleton and ground passes and the
+// facade's callers do not):
+//   1. Describe what it carries in a struct here and add it to BodyBatch. BodyPass::draw dispatches with
+//      std::visit over an overload set with no catch-all, so the build fails until the pass handles the new kind;
+//      a batch kind cannot be silently skipped.
+//   2. Give BodyPass a program (its own vertex shader under render/shaders/, added to STRATA_EMBEDDED_FILES; the
+//      fragment stage stays lit.frag, so every kind shades alike) and the GL objects the kind needs, and a
+//      check in BodyPass::check so a malformed batch throws before the frame starts.
+//   3. Write a BodySource that produces the batches (e.g. in render/scene_draw.cpp, from the CrowdScene).
+// A GPU-skinned batch would carry the rest layout (components/skin_layout.h SkinLayout: rest positions and
+// normals, each group's joints and weights, the triangles, and the muscle coefficients of a body with muscles),
+// which the pass uploads once and keys by address as it keys index buffers by triangle list today; and, every
+// frame, the walkers' skinning matrices (the walker table's `skinning` field, F(j) A(j)^-1, 12 floats per joint),
+// placements and muscle forces, streamed into shader storage buffers for a vertex shader that blends them. The
+// systems already compute all of these; only the scene would skip the skin system for those walkers. An impostor
+// batch would carry per walker a position, a heading and an atlas frame (and, once, the atlas image); the pass
+// draws one camera-facing quad per walker with its own program.
+//
+// Costs: virtual calls per batch (the pass asks for each batch twice a frame, to check it and to draw it), never
+// per walker or per vertex; a batch is a few pointers and sizes, copied by value. The rejected alternative, a
+// virtual "draw yourself" on the source, would put GL calls in every source and spread the pass's state (VAOs,
+// cached index buffers) across them.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <variant>
+
+namespace strata {
+
+// CPU-skinned bodies: per-walker deformed vertices already in world space, as six component arrays (SoA, the skin
+// system's output), sharing one triangle list (every walker of a batch uses the same mesh level). Walker w's
+// vertex v is element w * stride + v of each array. Drawn lit in the skin colour.
+struct BodyDrawInput {
+  std::span<const std::uint32_t> triangles;
+  const float *px = nullptr, *py = nullptr, *pz = nullptr, *nx = nullptr, *ny = nullptr, *nz = nullptr;
+  std::size_t stride = 0;        // >= vertex_count
+  std::size_t vertex_count = 0;
+  std::size_t walker_count = 0;
+  // Optional per-vertex colours, indexed like the positions (walker_count * stride entries), each bytes R, G, B,
+  // A in memory; A blends the colour over the skin colour (0 = plain skin). The binding editor shows weights so.
+  const std::uint32_t* rgba = nullptr;
+};
+
+// One draw's worth of bodies; the alternative held is the batch's kind (see the top of this file to add one).
+using BodyBatch = std::variant<BodyDrawInput>;
+
+// Where the body pass gets its batches from, for one frame. Batches are drawn in order, each with its own cached
+// topology (at most BodyPass::kMaxBatches, 4, per frame); the pointers they hold must stay valid until the
+// render() call that reads them returns.
+class BodySource {
+ public:
+  virtual ~BodySource() = default;
+  virtual std::size_t batch_count() const = 0;
+  virtual BodyBatch batch(std::size_t index) const = 0;
+};
+
+// The CPU-skinned bodies of a frame, one batch per input (body level). Holds the span, not a copy.
+class CpuSkinnedBodies final : public BodySource {
+ public:
+  explicit CpuSkinnedBodies(std::span<const BodyDrawInput> levels) : levels_(levels) {}
+  std::size_t batch_count() const override { return levels_.size(); }
+  BodyBatch batch(std::size_t index) const override { return levels_[index]; }
+
+ private:
+  std::span<const BodyDrawInput> levels_;
+};
+
+}  // namespace strata

@@ -1,0 +1,85 @@
+#include "render/crowd_renderer.h"
+
+#include <epoxy/gl.h>
+
+#include <optional>
+
+#include "render/body_pass.h"
+#include "render/ground_pass.h"
+#include "render/reference_pass.h"
+#include "render/render_target.h"
+#include "render/skeleton_pass.h"
+
+namespace strata {
+
+struct CrowdRenderer::Impl {
+  Impl(int width, int height, const RenderOptions& o) : options(o), target(width, height) {}
+
+  RenderOptions options;
+  RenderTarget target;
+  SkeletonPass skeleton;
+  BodyPass body;
+  GroundPass ground;
+  std::optional<ReferencePass> reference;  // built on the benchmark's first call
+  std::size_t triangles_drawn = 0;
+};
+
+CrowdRenderer::CrowdRenderer(int width, int height, RenderOptions options)
+    : impl_(std::make_unique<Impl>(width, height, options)) {}
+
+CrowdRenderer::~CrowdRenderer() = default;
+
+int CrowdRenderer::width() const { return impl_->target.width(); }
+int CrowdRenderer::height() const { return impl_->target.height(); }
+RenderOptions& CrowdRenderer::options() { return impl_->options; }
+void CrowdRenderer::resize(int width, int height) { impl_->target.resize(width, height); }
+std::size_t CrowdRenderer::triangles_drawn() const { return impl_->triangles_drawn; }
+
+void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
+                           const BodyDrawInput* bodies) {
+  render(input, view, projection,
+         bodies ? std::span<const BodyDrawInput>(bodies, 1) : std::span<const BodyDrawInput>());
+}
+
+void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
+                           std::span<const BodyDrawInput> body_levels) {
+  render(input, view, projection, CpuSkinnedBodies(body_levels));
+}
+
+void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
+                           const BodySource& bodies) {
+  Impl& r = *impl_;
+  // Every input is checked before the frame starts, so a bad one throws with the last image intact. Then ground,
+  // skeletons, bodies: the order the single-file renderer drew in, which the frames' bytes depend on where
+  // depth ties (a joint sphere and a body surface at the same depth keep whichever came first, GL_LESS).
+  r.body.check(bodies);
+  check_skeleton_input(input);
+  const RenderOptions& o = r.options;
+  r.target.begin_frame(o.clear_color);
+  if (o.draw_ground) r.ground.draw(drawn_joint_positions(input), view, projection, o.ground_color, o.clear_color);
+  if (o.draw_skeleton) r.skeleton.draw(input, view, projection, o);
+  r.body.draw(bodies, view, projection, o.skin_color);
+  r.triangles_drawn = r.body.triangles_drawn();
+  glBindVertexArray(0);  // no VAO of ours stays bound for GL the caller draws next (the viewer's panel)
+  r.target.resolve();
+}
+
+void CrowdRenderer::render_instanced_reference(const BodyDrawInput& mesh, std::span<const glm::vec3> offsets,
+                                               const glm::mat4& view, const glm::mat4& projection) {
+  Impl& r = *impl_;
+  if (!r.reference) r.reference.emplace();
+  r.reference->upload(mesh, offsets);
+  r.target.begin_frame(r.options.clear_color);
+  r.triangles_drawn = r.reference->draw(view, projection, r.options.skin_color);
+  glBindVertexArray(0);
+  r.target.resolve();
+}
+
+void CrowdRenderer::finish() const { glFinish(); }
+void CrowdRenderer::read_rgba(std::vector<std::uint8_t>& out) const { impl_->target.read_rgba(out); }
+unsigned CrowdRenderer::output_framebuffer() const { return impl_->target.output_framebuffer(); }
+void CrowdRenderer::blit_to_default_framebuffer(int width, int height) const {
+  impl_->target.blit_to_default_framebuffer(width, height);
+}
+
+}  // namespace strata

@@ -1,0 +1,38 @@
+#pragma once
+// The ground pass: a grid-lined quad on y = 0 under the walkers, fading into the clear colour towards its edge so
+// the crowd seems to stand on an endless plane.
+#include <span>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "render/gl_program.h"
+
+namespace strata {
+
+// The square the ground covers: centred under the points (x, z) and reaching at least 15 m past the farthest of
+// them, and 25 m from the centre, in every direction; the origin +-25 m when there is no finite point.
+struct GroundExtent {
+  glm::vec2 center{0.0f};
+  float half_size = 25.0f;
+};
+GroundExtent ground_extent(std::span<const glm::vec3> points);
+
+class GroundPass {
+ public:
+  // Needs a current GL 4.5 core context (as do draw and the destructor). Throws std::runtime_error on a shader
+  // failure.
+  GroundPass();
+
+  // Draws the ground under `joints` (every walker's world-space joints) into the bound framebuffer.
+  void draw(std::span<const glm::vec3> joints, const glm::mat4& view, const glm::mat4& projection,
+            const glm::vec3& ground_color, const glm::vec4& clear_color);
+
+ private:
+  GlObject program_;
+  GlObject vao_;  // empty: the quad comes from gl_VertexID, but the core profile draws only with a VAO bound
+};
+
+}  // namespace strata

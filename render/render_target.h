@@ -1,0 +1,50 @@
+#pragma once
+// The render target every pass draws into: a 4x multisampled colour + depth framebuffer, resolved into a
+// single-sample colour framebuffer at the end of a frame, which is what is read back or shown in a window.
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec4.hpp>
+
+#include "render/gl_program.h"
+
+namespace strata {
+
+class RenderTarget {
+ public:
+  // Needs a current GL 4.5 core context (as does every call and the destructor). Throws std::invalid_argument
+  // for a non-positive size, std::runtime_error when the framebuffers are incomplete.
+  RenderTarget(int width, int height);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // New storage at the new size (nothing when the size is unchanged). It is made before the old is freed, briefly
+  // holding both, so a failed resize leaves the old target working; freeing first would leave none.
+  void resize(int width, int height);
+
+  // Binds the multisampled framebuffer, sets every piece of state a frame depends on (the caller, or a GUI, may
+  // have changed any of it: viewport, scissor, blending, masks, depth test, culling) and clears colour and depth.
+  void begin_frame(const glm::vec4& clear_color);
+  // Resolves the multisampled framebuffer into the single-sample one.
+  void resolve() const;
+
+  // The single-sample framebuffer resolve() writes and read_rgba() reads.
+  unsigned output_framebuffer() const { return buffers_.resolve_fbo.id(); }
+  // RGBA8 pixels, rows top to bottom (image order), width*height*4 bytes.
+  void read_rgba(std::vector<std::uint8_t>& out) const;
+  // Copies the resolved image to framebuffer 0 (a window), scaled to the given size.
+  void blit_to_default_framebuffer(int width, int height) const;
+
+ private:
+  struct Buffers {
+    GlObject msaa_fbo, msaa_color, msaa_depth;
+    GlObject resolve_fbo, resolve_color;
+  };
+  static Buffers create(int width, int height, int samples);
+
+  int width_ = 0, height_ = 0;
+  int samples_ = 0;
+  Buffers buffers_;
+};
+
+}  // namespace strata
