@@ -6,7 +6,7 @@
 //
 // Today there is one kind of batch, BodyDrawInput: bodies skinned on the CPU (the skin system's output), six
 // world-space SoA streams the pass uploads every frame and draws with one multi-draw per batch. CpuSkinnedBodies
-// is the source of those, wrapping the inputs render/scene_draw.h builds from a CrowdScene.
+// is the source of those, wrapping the inputs render/scene_draw.h builds from a Crowd.
 //
 // Adding a kind (the body pass is the one pass that changes; the systems, the skeleton and ground passes and the
 // facade's callers do not):
@@ -16,7 +16,7 @@
 //   2. Give BodyPass a program (its own vertex shader under render/shaders/, added to STRATA_EMBEDDED_FILES; the
 //      fragment stage stays lit.frag, so every kind shades alike) and the GL objects the kind needs, and a
 //      check in BodyPass::check so a malformed batch throws before the frame starts.
-//   3. Write a BodySource that produces the batches (e.g. in render/scene_draw.cpp, from the CrowdScene).
+//   3. Write a BodySource that produces the batches (e.g. in render/scene_draw.cpp, from the Crowd).
 // A GPU-skinned batch would carry the rest layout (components/skin_layout.h SkinLayout: rest positions and
 // normals, each group's joints and weights, the triangles, and the muscle coefficients of a body with muscles),
 // which the pass uploads once and keys by address as it keys index buffers by triangle list today; and, every
