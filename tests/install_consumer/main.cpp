@@ -2,15 +2,16 @@
 #include <cstdio>
 
 #include <strata/io/hanim_loader.h>
-#include <strata/scene/crowd_scene.h>
+#include <strata/scene/spawn.h>
+#include <strata/scene/step.h>
 
 int main() {
   strata::Crowd scene(strata::to_rig(strata::load_default_humanoid()));
   strata::CrowdConfig config;
   config.walkers = 4;
-  spawn_crowd(scene, config);
+  strata::spawn_crowd(scene, config);
   strata::Profiler profiler;
-  step(scene, 1.0f / 30.0f, profiler);
+  strata::step(scene, 1.0f / 30.0f, profiler);
   const std::size_t joints = scene.rig().skeleton.joint_count();
   std::printf("consumer: %zu joints, %zu walkers, %zu systems timed\n", joints, scene.walker_count(),
               profiler.stats().size());
