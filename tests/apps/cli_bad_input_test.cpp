@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -14,6 +13,8 @@
 #include <iterator>
 #include <string>
 #include <vector>
+
+#include "tests/temp_dir.h"
 
 namespace {
 
@@ -25,14 +26,10 @@ struct Outcome {
   std::string err;  // stderr only
 };
 
-fs::path scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("strata_cli_bad_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
+// One scratch directory for the test program (CTest runs each test in a program of its own), removed when it exits.
+const fs::path& scratch() {
+  static const strata::test::TempDir dir("strata_cli_bad");
+  return dir.path();
 }
 
 Outcome run(const std::string& args) {

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/apps/strata_cli_runner.h"
+#include "tests/temp_dir.h"
 
 #include <sys/wait.h>
 
@@ -26,10 +27,11 @@ Result run(const std::string& args, const std::string& env_assignments = "") {
   return strata::test::run_strata(args, env_assignments);
 }
 
+// One scratch directory for the test program (CTest runs each test in a program of its own), removed when it exits.
 fs::path scratch(const std::string& name) {
-  fs::path p = fs::temp_directory_path() / ("strata_cli_test_" + std::to_string(getpid())) / name;
+  static const strata::test::TempDir dir("strata_cli_test");
+  fs::path p = dir / name;
   fs::remove_all(p);
-  fs::create_directories(p.parent_path());
   return p;
 }
 

@@ -5,7 +5,6 @@
 
 #include <signal.h>
 #include <sys/resource.h>
-#include <unistd.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -20,18 +19,14 @@
 #include "io/atomic_file.h"
 #include "io/image_writer.h"
 #include "profiling/profiler.h"
+#include "tests/temp_dir.h"
 
 namespace strata {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path scratch_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("strata_atomic_" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using test::TempDir;
 
 std::vector<std::string> entries(const fs::path& dir) {
   std::vector<std::string> names;
@@ -80,7 +75,8 @@ void fill(Profiler& p) {
 }
 
 TEST(AtomicWrite, SuccessLeavesOnlyTheTarget) {
-  const fs::path dir = scratch_dir("ok");
+  const TempDir tmp("strata_atomic_ok");
+  const fs::path& dir = tmp.path();
   write_file_atomically(dir / "a.json", "{}\n");
   write_image(dir / "f.png", 16, 8, 4, noise(16, 8));
   Profiler p(120, true);
@@ -99,7 +95,8 @@ TEST(AtomicWrite, SuccessLeavesOnlyTheTarget) {
 }
 
 TEST(AtomicWrite, FailedWritesLeaveNoFileBehind) {
-  const fs::path dir = scratch_dir("fail");
+  const TempDir tmp("strata_atomic_fail");
+  const fs::path& dir = tmp.path();
   const std::string big(100000, 'x');
   Profiler p(120, true);
   fill(p);
@@ -112,7 +109,8 @@ TEST(AtomicWrite, FailedWritesLeaveNoFileBehind) {
 }
 
 TEST(AtomicWrite, FailedWriteKeepsThePreviousFile) {
-  const fs::path dir = scratch_dir("keep");
+  const TempDir tmp("strata_atomic_keep");
+  const fs::path& dir = tmp.path();
   write_file_atomically(dir / "summary.json", "old\n");
   EXPECT_TRUE(throws_under_file_size_limit(256, [&] { write_file_atomically(dir / "summary.json", std::string(5000, 'n')); }));
   EXPECT_EQ(read_text(dir / "summary.json"), "old\n");
@@ -120,7 +118,8 @@ TEST(AtomicWrite, FailedWriteKeepsThePreviousFile) {
 }
 
 TEST(AtomicWrite, UncommittedFileIsRemovedAndMissingDirectoryNamesThePath) {
-  const fs::path dir = scratch_dir("abandon");
+  const TempDir tmp("strata_atomic_abandon");
+  const fs::path& dir = tmp.path();
   {
     AtomicFile f(dir / "x.bin");
     std::ofstream(f.temp_path()) << "partial";

@@ -19,6 +19,7 @@
 #include "io/makehuman.h"
 #include "io/obj.h"
 #include "rig/binding.h"
+#include "tests/temp_dir.h"
 
 namespace strata {
 namespace {
@@ -71,12 +72,12 @@ TEST(BadInput, TruncatedBinaryGltfNamesTheByteOffset) {
   std::vector<std::uint8_t> cut(glb.begin(), glb.end() - 40);
   const std::uint32_t length = static_cast<std::uint32_t>(cut.size());
   std::memcpy(cut.data() + 8, &length, 4);
-  const fs::path file = fs::temp_directory_path() / "strata_bad_input_cut.glb";
+  const test::TempDir tmp("strata_bad_input");
+  const fs::path file = tmp / "cut.glb";
   std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(cut.data()), static_cast<std::streamsize>(cut.size()));
   const std::string m = error_of([&] { (void)load_gltf(file); }, file.string());
   EXPECT_TRUE(contains(m, "runs past the end of the file")) << m;
   EXPECT_TRUE(contains(m, "truncated")) << m;
-  fs::remove(file);
 }
 
 TEST(BadInput, BvhChannelCountsDisagreeWithFrameData) {

@@ -3,9 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "tests/apps/strata_cli_runner.h"
+#include "tests/temp_dir.h"
 #include <nlohmann/json.hpp>
-
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
@@ -39,25 +38,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path scratch_dir() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("strata_export_test_" + std::to_string(getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
+// One scratch directory for the test program (CTest runs each test in a program of its own), removed when it exits.
+const fs::path& scratch_dir() {
+  static const test::TempDir dir("strata_export_test");
+  return dir.path();
 }
-
-// Removes the scratch directory when the suite ends.
-class ScratchCleanup : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(scratch_dir(), ec);
-  }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
 
 const Rig& shipped_rig() {
   static const Rig rig = [] {

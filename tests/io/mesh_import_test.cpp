@@ -27,6 +27,7 @@
 #include "io/obj.h"
 #include "systems/animation_sample.h"
 #include "reference/fk_reference.h"
+#include "tests/temp_dir.h"
 
 namespace strata {
 namespace {
@@ -558,7 +559,7 @@ std::string base64(const std::vector<unsigned char>& bytes) {
 }
 
 // One triangle skinned to one joint. `position_count` lets a test claim more vertices than the buffer holds.
-std::filesystem::path write_triangle_gltf(const std::string& file, bool skinned, int position_count = 3,
+std::filesystem::path write_triangle_gltf(const std::filesystem::path& path, bool skinned, int position_count = 3,
                                           float bad_coordinate = 0.0f) {
   std::vector<unsigned char> bytes;
   auto put = [&](const void* p, std::size_t n) {
@@ -591,7 +592,6 @@ std::filesystem::path write_triangle_gltf(const std::string& file, bool skinned,
     j["nodes"][0]["skin"] = 0;
     j["skins"] = {{{"joints", {1}}}};
   }
-  const std::filesystem::path path = std::filesystem::temp_directory_path() / file;
   std::ofstream(path) << j.dump();
   return path;
 }
@@ -599,27 +599,28 @@ std::filesystem::path write_triangle_gltf(const std::string& file, bool skinned,
 TEST(Gltf, Errors) {
   EXPECT_NE(load_error_message([] { load_gltf("/nonexistent/a.glb"); }).find("/nonexistent/a.glb: cannot open"),
             std::string::npos);
-  const std::filesystem::path junk = std::filesystem::temp_directory_path() / "strata_import_junk.gltf";
+  const test::TempDir tmp("strata_import");
+  const std::filesystem::path junk = tmp / "strata_import_junk.gltf";
   std::ofstream(junk) << "this is not json";
   EXPECT_NE(load_error_message([&] { load_gltf(junk); }).find("strata_import_junk.gltf: not a readable glTF"),
             std::string::npos);
 
   // The small file is valid when skinned: one joint at (0, 1, 0), identity IBM, rest = bind positions.
-  const ImportedBody ok = load_gltf(write_triangle_gltf("strata_import_ok.gltf", true));
+  const ImportedBody ok = load_gltf(write_triangle_gltf(tmp / "strata_import_ok.gltf", true));
   EXPECT_EQ(ok.mesh.vertex_count(), 3u);
   EXPECT_EQ(ok.skeleton.joint_names, (std::vector<std::string>{"bone"}));
   EXPECT_EQ(ok.skeleton.centers[0], glm::vec3(0, 1, 0));
   EXPECT_NEAR(ok.mesh.positions[1].y, 1.0f, 1e-6f);  // identity IBM: the joint's default global moves the mesh
   EXPECT_TRUE(ok.clips.empty());
 
-  EXPECT_NE(load_error_message([] { load_gltf(write_triangle_gltf("strata_import_noskin.gltf", false)); })
+  EXPECT_NE(load_error_message([&] { load_gltf(write_triangle_gltf(tmp / "strata_import_noskin.gltf", false)); })
                 .find("no skinned mesh"),
             std::string::npos);
-  const std::string range = load_error_message([] { load_gltf(write_triangle_gltf("strata_import_range.gltf", true, 5)); });
+  const std::string range = load_error_message([&] { load_gltf(write_triangle_gltf(tmp / "strata_import_range.gltf", true, 5)); });
   EXPECT_NE(range.find("strata_import_range.gltf: accessor 0 (POSITION)"), std::string::npos) << range;
   EXPECT_NE(range.find("out of range"), std::string::npos) << range;
   const std::string nan = load_error_message(
-      [] { load_gltf(write_triangle_gltf("strata_import_nan.gltf", true, 3, std::numeric_limits<float>::quiet_NaN())); });
+      [&] { load_gltf(write_triangle_gltf(tmp / "strata_import_nan.gltf", true, 3, std::numeric_limits<float>::quiet_NaN())); });
   EXPECT_NE(nan.find("accessor 0 (POSITION): element 2 is not finite"), std::string::npos) << nan;
 }
 

@@ -13,10 +13,11 @@
 #include <sstream>
 #include <string>
 #include <thread>
-#include <unistd.h>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "tests/temp_dir.h"
 
 namespace {
 
@@ -30,15 +31,8 @@ const std::vector<std::string> kSystems = {"animation", "fk", "render"};
 // A unique scratch directory per test, removed afterwards.
 class ProfilerFiles : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("strata_profiler_test_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  const strata::test::TempDir tmp_{"strata_profiler_test"};
+  const fs::path& dir_ = tmp_.path();
 };
 
 // Spins rather than sleeps: sleep_for on a loaded 2-core machine can overshoot by milliseconds, and these

@@ -34,6 +34,7 @@
 #include "render/gl_program.h"
 #include "render/ground_pass.h"
 #include "render/skeleton_geometry.h"
+#include "tests/temp_dir.h"
 
 namespace strata {
 namespace {
@@ -821,15 +822,6 @@ TEST(GlfwWindow, HiddenWindowRendersAndBlits) {
 
 class PngTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("strata_render_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
   static std::vector<std::uint8_t> read_bytes(const std::filesystem::path& path) {
     std::ifstream in(path, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -839,7 +831,8 @@ class PngTest : public ::testing::Test {
            std::uint32_t{b[at + 3]};
   }
 
-  std::filesystem::path dir_;
+  const test::TempDir tmp_{"strata_render_test"};  // a scratch directory per test, removed afterwards
+  const std::filesystem::path& dir_ = tmp_.path();
 };
 
 TEST_F(PngTest, WritesAValidPngHeaderForRgbaAndRgb) {

@@ -5,8 +5,6 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -25,6 +23,7 @@
 #include "rig/body_generator.h"
 #include "rig/body_rig.h"
 #include "tests/apps/strata_cli_runner.h"
+#include "tests/temp_dir.h"
 
 namespace strata {
 namespace {
@@ -39,19 +38,11 @@ std::string read_text(const fs::path& path) {
 }
 fs::path repo_data(const char* name) { return fs::path(STRATA_TEST_DATA) / ".." / ".." / "data" / name; }
 
-fs::path scratch_dir() {
-  return fs::temp_directory_path() / ("strata_binding_editor_test_" + std::to_string(::getpid()));
-}
+// One scratch directory for the test program (CTest runs each test in a program of its own), removed when it exits.
 fs::path scratch(const std::string& name) {
-  fs::create_directories(scratch_dir());
-  return scratch_dir() / name;
+  static const test::TempDir dir("strata_binding_editor_test");
+  return dir / name;
 }
-// Removes the scratch files once every test has run.
-class ScratchCleanup : public ::testing::Environment {
- public:
-  void TearDown() override { fs::remove_all(scratch_dir()); }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
 
 EditMesh edit_mesh(const Mesh& m) { return {m.positions, m.triangles}; }
 

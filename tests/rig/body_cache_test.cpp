@@ -6,10 +6,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include <unistd.h>
-
 #include "io/hanim_loader.h"
 #include "rig/body_cache.h"
+#include "tests/temp_dir.h"
 
 namespace strata {
 namespace {
@@ -34,14 +33,9 @@ BodyLevels sample_body() {
   return b;
 }
 
-fs::path scratch() {
-  fs::path dir = fs::temp_directory_path() / ("strata_body_cache_" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  return dir / "body.bin";
-}
-
 TEST(BodyCache, RoundTripsExactly) {
-  const fs::path file = scratch();
+  const test::TempDir tmp("strata_body_cache");
+  const fs::path file = tmp / "strata" / "body.bin";  // the directory does not exist yet
   const BodyLevels body = sample_body();
   save_body_cache(file, 42, body);
   std::optional<BodyLevels> back = load_body_cache(file, 42);
@@ -54,11 +48,11 @@ TEST(BodyCache, RoundTripsExactly) {
     EXPECT_EQ(back->levels[l].part_names, body.levels[l].part_names);
   }
   EXPECT_EQ(back->cage.positions, body.cage.positions);
-  fs::remove_all(file.parent_path());
 }
 
 TEST(BodyCache, RefusesOtherKeysAndDamagedFiles) {
-  const fs::path file = scratch();
+  const test::TempDir tmp("strata_body_cache");
+  const fs::path file = tmp / "strata" / "body.bin";
   EXPECT_FALSE(load_body_cache(file, 42).has_value()) << "missing file";
   save_body_cache(file, 42, sample_body());
   EXPECT_FALSE(load_body_cache(file, 43).has_value()) << "stale key";
@@ -73,7 +67,6 @@ TEST(BodyCache, RefusesOtherKeysAndDamagedFiles) {
     f.write(garbage, sizeof garbage);
   }
   EXPECT_FALSE(load_body_cache(file, 42).has_value()) << "corrupt";
-  fs::remove_all(file.parent_path());
 }
 
 TEST(BodyCache, KeyFollowsTheSkeletonAndOptions) {

@@ -4,9 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "tests/apps/strata_cli_runner.h"
+#include "tests/temp_dir.h"
 #include <nlohmann/json.hpp>
-
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -361,10 +360,11 @@ namespace fs = std::filesystem;
 using Result = test::CliResult;
 Result run(const std::string& args) { return test::run_strata(args); }
 
+// One scratch directory for the test program (CTest runs each test in a program of its own), removed when it exits.
 fs::path scratch(const std::string& name) {
-  fs::path p = fs::temp_directory_path() / ("strata_subdiv_test_" + std::to_string(getpid())) / name;
+  static const test::TempDir dir("strata_subdiv_test");
+  fs::path p = dir / name;
   fs::remove_all(p);
-  fs::create_directories(p.parent_path());
   return p;
 }
 

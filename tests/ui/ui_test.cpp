@@ -19,6 +19,7 @@
 #include "rig/binding.h"
 #include "rig/binding_editor.h"
 #include "tests/apps/strata_cli_runner.h"
+#include "tests/temp_dir.h"
 #include "ui/imgui_layer.h"
 #include "ui/view_panel.h"
 #include "scene/state_hash.h"
@@ -234,7 +235,8 @@ TEST_F(UiTest, BindingTabStartsAndStopsTheEditor) {
 
 TEST(ViewSessionCrowd, AFailedNewCrowdKeepsTheOldOneAndSaysWhy) {
   // A skeleton file that disappears after the first crowd was built from it.
-  const auto path = std::filesystem::temp_directory_path() / "strata_ui_test_skeleton.x3d";
+  const test::TempDir tmp("strata_ui_test");
+  const auto path = tmp / "skeleton.x3d";
   std::filesystem::copy_file(std::filesystem::path(STRATA_TEST_DATA) / "../../data/default_skeleton.x3d", path,
                              std::filesystem::copy_options::overwrite_existing);
   SceneOptions o;
@@ -365,7 +367,8 @@ TEST(BindingEditorSession, ClickBindShowsSavesAndUndoes) {
   ASSERT_EQ(draws.size(), 1u);
   ASSERT_NE(draws[0].rgba, nullptr);
   // Saved, the overrides file reproduces the edited binding from scratch.
-  const auto path = std::filesystem::temp_directory_path() / "strata_ui_test_overrides.json";
+  const test::TempDir tmp("strata_ui_test");
+  const auto path = tmp / "overrides.json";
   b.save_path = path.string();
   b.save_requested = true;
   rig.session.apply_binding_requests();
@@ -376,7 +379,6 @@ TEST(BindingEditorSession, ClickBindShowsSavesAndUndoes) {
   const SkinBinding rebound = bind_three_step(edited_rig.body->levels[0].mesh, edited_rig.skeleton, reloaded);
   EXPECT_EQ(rebound.joints, after.joints);
   EXPECT_EQ(rebound.weights, after.weights);
-  std::filesystem::remove(path);
   b.undo_requested = true;
   rig.session.apply_binding_requests();
   EXPECT_EQ(rig.level_binding().joints, before.joints);
@@ -455,7 +457,8 @@ TEST(BindingEditorSession, BrushPaintsAlongTheDrag) {
 }
 
 TEST(BindingEditorSession, StartsFromTheOverridesFileTheSceneWasBoundWith) {
-  const auto path = std::filesystem::temp_directory_path() / "strata_ui_test_start.json";
+  const test::TempDir tmp("strata_ui_test");
+  const auto path = tmp / "start.json";
   {
     std::ofstream f(path);
     f << R"({"overrides": [{"name": "ball", "sphere": {"center": [0, 1, 0], "radius": 0.1}, "joints": ["vl5"]}]})";
@@ -469,7 +472,6 @@ TEST(BindingEditorSession, StartsFromTheOverridesFileTheSceneWasBoundWith) {
   ASSERT_TRUE(session.panel().binding.active);
   ASSERT_EQ(session.binding_tables().overrides.size(), 1u);
   EXPECT_EQ(session.binding_tables().overrides[0].name, "ball");
-  std::filesystem::remove(path);
 }
 
 TEST(BindingEditorSession, EditsSurviveANewCrowdAndFollowTheLevel) {
@@ -508,8 +510,8 @@ namespace strata {
 namespace {
 
 TEST(ViewHeadless, SavesTheSceneWithThePanelAndRejectsAnUnknownJoint) {
-  const auto png = std::filesystem::temp_directory_path() / "strata_ui_test_view.png";
-  std::filesystem::remove(png);
+  const test::TempDir tmp("strata_ui_test");
+  const auto png = tmp / "view.png";
   const test::CliResult ok = test::run_strata("view --headless-png " + png.string() +
                                               " --walkers 1 --rest --frames 3 --width 320 --height 240 "
                                               "--edit-binding l_hip",
