@@ -75,10 +75,9 @@ class PosedWalker {
     MuscleGains gains = scene_->muscle_gains();
     gains.global = gain;
     scene_->set_muscle_gains(gains);
-    const WalkerLanes l = scene_->lanes();
-    fk_system(scene_->rig().skeleton, l);
-    muscle_system(scene_->rig().muscles->set, l);
-    skin_system(scene_->skin_layout(), l, out_);
+    run_or_throw(make_fk_job(scene_->rig().skeleton, scene_->walkers()), "fk");
+    run_or_throw(make_muscle_job(scene_->rig().muscles->set, scene_->walkers()), "muscle");
+    run_or_throw(make_skin_job(scene_->skin_layout(), scene_->walkers(), out_), "skin");
     return out_;
   }
 

@@ -28,8 +28,9 @@ void BM_FkSingleThread(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   strata::CrowdScene scene = make_scene(static_cast<std::size_t>(state.range(0)));
   strata::WalkerLanes lanes = scene.lanes();
+  const strata::FkJob job = strata::make_fk_job(scene.rig().skeleton, scene.walkers());
   for (auto _ : state) {
-    strata::fk_range(scene.rig().skeleton, lanes, 0, lanes.count);
+    if (!job.run()) state.SkipWithError("invalid FkJob");
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(lanes.count * lanes.joints));

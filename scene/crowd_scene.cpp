@@ -207,17 +207,17 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
   }
   {
     STRATA_PROFILE_SCOPE(p, "fk");
-    fk_system(rig().skeleton, l);
+    run_or_throw(make_fk_job(rig().skeleton, walkers()), "fk");
   }
   if (muscles_enabled()) {
     STRATA_PROFILE_SCOPE(p, "muscle");
-    muscle_system(rig().muscles->set, l);
+    run_or_throw(make_muscle_job(rig().muscles->set, walkers()), "muscle");
   }
   const int level = body_level();
   lod_counts_ = {};
   if (subdiv_) {
     STRATA_PROFILE_SCOPE(p, "subdiv");  // cage skinning + refinement + normals
-    subdiv_system(*subdiv_, l, skinned_, muscles_enabled() ? &cage_muscles_ : nullptr);
+    run_or_throw(make_subdiv_job(*subdiv_, walkers(), skinned_, muscles_enabled() ? &cage_muscles_ : nullptr), "subdiv");
     lod_counts_[0] = l.count;
   } else if (level >= 0 && (view_ || level == kAutoBodyLevel)) {
     const bool automatic = level == kAutoBodyLevel;
@@ -246,13 +246,13 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
     if (automatic) {
       level_out_.resize(level_layouts_.size());
       for (std::size_t k = 0; k < level_layouts_.size(); ++k)
-        skin_system(level_layouts_[k], l, level_out_[k], &level_walkers_[k]);
+        run_or_throw(make_skin_job(level_layouts_[k], walkers(), level_out_[k], &level_walkers_[k]), "skin");
     } else {
-      skin_system(layout_, l, skinned_, &level_walkers_[0]);
+      run_or_throw(make_skin_job(layout_, walkers(), skinned_, &level_walkers_[0]), "skin");
     }
   } else if (level >= 0) {
     STRATA_PROFILE_SCOPE(p, "skin");
-    skin_system(layout_, l, skinned_);
+    run_or_throw(make_skin_job(layout_, walkers(), skinned_), "skin");
     lod_counts_[static_cast<std::size_t>(std::min(level, 2))] = l.count;
   } else {
     skinned_ = SkinnedCrowd{};
