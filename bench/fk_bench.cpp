@@ -42,8 +42,9 @@ void BM_AnimationSample(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   strata::CrowdScene scene = make_scene(static_cast<std::size_t>(state.range(0)));
   strata::WalkerLanes lanes = scene.lanes();
+  const strata::AnimationJob job = strata::make_animation_job(scene.rig(), scene.walkers(), 1.0f / 60.0f);
   for (auto _ : state) {
-    strata::animation_system(scene.rig(), lanes, 1.0f / 60.0f);
+    if (!job.run()) state.SkipWithError("invalid AnimationJob");
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(lanes.count * lanes.joints));

@@ -50,6 +50,12 @@ struct ColumnView {
   // Rows [first, first + n) of every column: same stride, base moved. For running a job on part of a table.
   ColumnView rows(std::size_t first, std::size_t n) const { return {base ? base + first : base, components, stride, n}; }
 
+  // Columns [first, first + n) of the view: for a job that reads one component of a field and writes another
+  // (the clock's time is written, its rate only read), so each gets the constness it needs.
+  ColumnView columns(std::uint32_t first, std::uint32_t n) const {
+    return {base ? component(first) : base, n, stride, count};
+  }
+
   // A mutable view converts to a read-only one (an output of one job is the input of the next).
   operator ColumnView<const T>() const
     requires(!std::is_const_v<T>)

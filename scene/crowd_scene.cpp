@@ -103,10 +103,11 @@ Entity CrowdScene::spawn_walker(std::uint32_t path, float distance, float phase,
   SoaTable& t = walkers();
   const std::pair<std::uint32_t, float> values[] = {
       {kGaitDistance, distance}, {kGaitPhase, phase - std::floor(phase)}, {kGaitCadence, cadence},
-      {kGaitCadenceTarget, cadence}, {kGaitHeight, height}, {kGaitPath, static_cast<float>(path)},
+      {kGaitCadenceTarget, cadence}, {kGaitHeight, height},
       {kGaitBaseSpeed, base_speed}, {kGaitSpeedAmplitude, speed_amplitude}, {kGaitSpeedPhase, speed_phase}};
   for (const auto& [component, value] : values) t.f32(kWalkerGait, component)[block] = value;
-  start_walking(*locomotion_, paths_, lanes(), block, style_);
+  t.u32(kWalkerPath)[block] = path;
+  run_or_throw(make_start_walking_job(*locomotion_, paths_, t, block, style_), "start_walking");
   return e;
 }
 
@@ -147,7 +148,7 @@ Entity CrowdScene::spawn(const glm::vec3& position, float heading, float phase, 
   for (std::uint32_t c = 0; c < 5; ++c) t.f32(kWalkerPlacement, c)[loc.block] = values[c];
   t.f32(kWalkerClock, 0)[loc.block] = phase;
   t.f32(kWalkerClock, 1)[loc.block] = rate;
-  t.f32(kWalkerClock, 2)[loc.block] = static_cast<float>(clip);
+  t.i32(kWalkerClip)[loc.block] = clip;
   // Identity rotations (w = 1) so the walker is in rest pose before its first animation step.
   const std::uint32_t joints = static_cast<std::uint32_t>(rig().skeleton.joint_count());
   for (std::uint32_t j = 0; j < joints; ++j) t.f32(kWalkerLocalRotation, j * 4 + 3)[loc.block] = 1.0f;
@@ -186,24 +187,24 @@ void CrowdScene::simulate(float dt, Profiler& profiler) {
   if (motion_ == MotionSource::Walk && locomotion_) {
     {
       STRATA_PROFILE_SCOPE(p, "locomotion");
-      locomotion_system(*locomotion_, paths_, l, dt, style_);
+      run_or_throw(make_locomotion_job(*locomotion_, paths_, walkers(), dt, style_), "locomotion");
     }
     {
       STRATA_PROFILE_SCOPE(p, "ik");
-      ik_system(rig().skeleton, locomotion_->limbs, l);
+      run_or_throw(make_ik_job(rig().skeleton, locomotion_->limbs, walkers()), "ik");
     }
   } else if (motion_ == MotionSource::Mocap && mocap_rig_) {
     {
       STRATA_PROFILE_SCOPE(p, "mocap");
-      mocap_drive_system(*mocap_rig_, l, dt);
+      run_or_throw(make_mocap_drive_job(*mocap_rig_, walkers(), dt), "mocap");
     }
     {
       STRATA_PROFILE_SCOPE(p, "ik");
-      ik_system(rig().skeleton, mocap_rig_->limbs, l);
+      run_or_throw(make_ik_job(rig().skeleton, mocap_rig_->limbs, walkers()), "ik");
     }
   } else {
     STRATA_PROFILE_SCOPE(p, "animation");
-    animation_system(rig(), l, dt);
+    run_or_throw(make_animation_job(rig(), walkers(), dt), "animation");
   }
   {
     STRATA_PROFILE_SCOPE(p, "fk");

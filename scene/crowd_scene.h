@@ -145,7 +145,7 @@ class CrowdScene {
   WalkerLanes lanes() { return walker_lanes(walkers(), static_cast<std::uint32_t>(rig().skeleton.joint_count())); }
 
   // Clip selector walker `block` plays (a clip index, kAllClips or kRestPose).
-  int clip_of(std::size_t block) const { return static_cast<int>(walkers().f32(kWalkerClock, 2)[block]); }
+  int clip_of(std::size_t block) const { return walkers().i32(kWalkerClip)[block]; }
 
   // FNV-1a over the bytes of every walker's world and skinning matrices, in walker order: the determinism pin.
   std::uint64_t state_hash() const;

@@ -22,6 +22,10 @@
 
 namespace strata {
 
+// The most joints a rig may have for the jobs that keep a walker's per-joint scratch on the stack (skinning's
+// 512 3x4 matrices are 24 KiB; IK's double frames 48 KiB), so run() never allocates. Validate() refuses more.
+inline constexpr std::size_t kMaxJointsPerRig = 512;
+
 // For the frame script and tools, where invalid inputs are a programming error rather than data to report:
 // runs `job` and throws std::logic_error naming the system when it refused. Tests call validate()/run() instead.
 template <class Job>

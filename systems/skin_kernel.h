@@ -42,7 +42,6 @@ inline SkinOutput skin_output_in(float* block, std::size_t stride) {
 // The walker columns every skinning job reads, checked together: the same rows, skinning a whole number of 3x4
 // matrices (at most kMaxJointsPerRig joints), placement 5 wide, muscle_force either empty (components 0: no
 // displacement) or 2..kMaxMusclePoints wide.
-inline constexpr std::size_t kMaxJointsPerRig = 512;
 bool skin_columns_valid(const ColumnView<const float>& skinning, const ColumnView<const float>& placement,
                         const ColumnView<const float>& muscle_force);
 // Whether `layout` can be skinned from `joints` joints and `muscle_points` force columns (0: none): groups inside

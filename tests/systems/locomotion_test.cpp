@@ -55,7 +55,7 @@ TEST(Locomotion, WalkerStaysOnItsPathAndFacesAlongIt) {
     scene.simulate(1.0f / 30.0f, profiler);
     WalkerLanes l = scene.lanes();
     for (std::size_t w = 0; w < l.count; ++w) {
-      const CardinalSpline& path = scene.paths()[static_cast<std::size_t>(l.gait[kGaitPath * l.stride + w])];
+      const CardinalSpline& path = scene.paths()[l.path[w]];
       const float s = l.gait[kGaitDistance * l.stride + w];
       const glm::vec3 on_path = path.point_at_length(s);
       const glm::vec3 placed{l.placement[0 * l.stride + w], 0.0f, l.placement[2 * l.stride + w]};
@@ -137,7 +137,7 @@ TEST(Locomotion, CrowdIsVariedAndLanesKeepTheirSpacing) {
   // Same lane, same speed: a taller walker takes fewer, longer steps.
   for (std::size_t a = 0; a < l.count; ++a)
     for (std::size_t b = 0; b < l.count; ++b) {
-      if (l.gait[kGaitPath * l.stride + a] != l.gait[kGaitPath * l.stride + b]) continue;
+      if (l.path[a] != l.path[b]) continue;
       const float ha = heights[a], hb = heights[b];
       if (ha > hb + 0.02f) {
         const float sa = gait_parameters(ha, cadences[a]).speed, sb = gait_parameters(hb, cadences[b]).speed;
