@@ -99,7 +99,8 @@ struct StartWalkingJob : LocomotionColumns {
   std::size_t walker = 0;
 
   // Rig (four limbs, joints inside the rotations) and style set, paths non-empty, walker in range, every view
-  // with the same rows and its width, no two views overlapping.
+  // with the same rows and its width, no two views overlapping; the walker's gait height positive and finite,
+  // its cadence and cadence target finite (the gait formulas refuse anything else).
   bool validate() const;
   bool run() const;
 };
@@ -112,7 +113,7 @@ struct LocomotionJob : LocomotionColumns {
   const GaitStyle* style = nullptr;
   float dt = 0.0f;
 
-  // As StartWalkingJob's, with dt finite instead of a walker.
+  // As StartWalkingJob's, with dt finite instead of a walker, and the gait state checked for every walker.
   bool validate() const;
   bool run() const;
 };

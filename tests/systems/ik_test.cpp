@@ -14,6 +14,7 @@
 #include "io/hanim_loader.h"
 #include "systems/fk.h"
 #include "reference/fk_reference.h"
+#include "tests/systems/job_test_util.h"
 #include "systems/ik.h"
 
 namespace strata {
@@ -682,6 +683,59 @@ TEST(IkSystem, OutputIdenticalForOneAndTwoThreads) {
       ASSERT_EQ(std::memcmp(x.data(), y.data(), x.size_bytes()), 0) << "flags of limb " << k;
     }
   }
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing.
+TEST(IkJob, JobValidity) {
+  const Skeleton& s = shipped();
+  const std::vector<LimbChain> limbs = make_limbs(s);
+  SystemCase c = make_system_case(5, 8);
+  SoaTable& table = *c.table;
+  const IkJob good = make_ik_job(s, limbs, table);
+  test::fill_sentinel(table, kWalkerLocalRotation);
+  test::fill_sentinel(table, kWalkerIkResult);
+  test::fill_sentinel(table, kWalkerIkFlags);
+  auto untouched = [&] {
+    return test::holds_sentinel(table, kWalkerLocalRotation) && test::holds_sentinel(table, kWalkerIkResult) &&
+           test::holds_sentinel(table, kWalkerIkFlags);
+  };
+  using namespace test;
+  IkJob j = good;
+  j.skeleton = nullptr;
+  expect_refused(j, "no skeleton", untouched);
+  j = good, j.limbs = {};
+  expect_refused(j, "no limbs", untouched);
+  std::vector<LimbChain> five = limbs;
+  five.push_back(limbs[0]);
+  j = good, j.limbs = five;
+  expect_refused(j, "more limbs than goal slots", untouched);
+  std::vector<LimbChain> broken = limbs;
+  broken[1].lower = static_cast<std::int32_t>(s.joint_count());
+  j = good, j.limbs = broken;
+  expect_refused(j, "a limb joint outside the skeleton", untouched);
+  broken = limbs;
+  std::swap(broken[2].middle, broken[2].lower);
+  j = good, j.limbs = broken;
+  expect_refused(j, "a limb that is not a chain", untouched);
+  j = good, j.ik_goal = with_components(good.ik_goal, kIkLimbs * kIkGoalFloats + 1);
+  expect_refused(j, "goals of another layout", untouched);
+  j = good, j.ik_mode = without_base(good.ik_mode);
+  expect_refused(j, "no modes", untouched);
+  j = good, j.root_translation = with_count(good.root_translation, 4);
+  expect_refused(j, "root translation of fewer walkers", untouched);
+  j = good, j.local_rotation = with_components(good.local_rotation, 4 * 3);
+  expect_refused(j, "rotations of another joint count", untouched);
+  j = good, j.ik_error = with_stride(good.ik_error, 3);
+  expect_refused(j, "error stride below the walker count", untouched);
+  j = good, j.ik_flags = without_base(good.ik_flags);
+  expect_refused(j, "no flags output", untouched);
+  // An output over an input's memory: the error column written over the goals.
+  j = good, j.ik_error.base = const_cast<float*>(good.ik_goal.base);
+  expect_refused(j, "error output aliasing the goals", untouched);
+
+  EXPECT_TRUE(good.validate());
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(test::holds_sentinel(table, kWalkerIkFlags));
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -12,6 +13,7 @@
 #include "scene/crowd_scene.h"
 #include "systems/gait_metrics.h"
 #include "systems/pose_gather.h"
+#include "tests/systems/job_test_util.h"
 
 namespace strata {
 namespace {
@@ -192,6 +194,74 @@ TEST(Locomotion, RigWithoutLegsCannotWalkAndSaysWhy) {
   CrowdConfig config;
   config.motion = MotionSource::Walk;
   EXPECT_THROW(scene.spawn_crowd(config), std::invalid_argument);
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing: the per-frame job and the
+// one that starts a walker.
+TEST(LocomotionJob, JobValidity) {
+  CrowdScene scene = make_walkers(3);
+  SoaTable& table = scene.walkers();
+  const LocomotionRig& rig = *scene.locomotion_rig();
+  const std::size_t written[] = {kWalkerGait, kWalkerClock, kWalkerPlacement, kWalkerRootTranslation,
+                                 kWalkerLocalRotation, kWalkerIkGoal, kWalkerIkMode};
+  // Gait state as spawned (the jobs validate it), every other written column the sentinel.
+  for (std::size_t f : written)
+    if (f != kWalkerGait) test::fill_sentinel(table, f);
+  auto untouched = [&] {
+    for (std::size_t f : written)
+      if (f != kWalkerGait && !test::holds_sentinel(table, f)) return false;
+    return true;
+  };
+  using namespace test;
+  const LocomotionJob good = make_locomotion_job(rig, scene.paths(), table, 1.0f / 60.0f, scene.style());
+  LocomotionJob j = good;
+  j.rig = nullptr;
+  expect_refused(j, "no rig", untouched);
+  j = good, j.style = nullptr;
+  expect_refused(j, "no style", untouched);
+  j = good, j.paths = {};
+  expect_refused(j, "no paths", untouched);
+  j = good, j.dt = std::numeric_limits<float>::quiet_NaN();
+  expect_refused(j, "dt not finite", untouched);
+  j = good, j.path = without_base(good.path);
+  expect_refused(j, "no path indices", untouched);
+  j = good, j.gait = with_components(good.gait, kGaitFloats - 1);
+  expect_refused(j, "gait state of another layout", untouched);
+  j = good, j.time = with_count(good.time, 2);
+  expect_refused(j, "clock of fewer walkers", untouched);
+  j = good, j.placement = with_stride(good.placement, 1);
+  expect_refused(j, "placement stride below the walker count", untouched);
+  j = good, j.local_rotation = with_components(good.local_rotation, 4 * 3);
+  expect_refused(j, "rotations too few for the rig's joints", untouched);
+  j = good, j.ik_goal = good.gait.columns(0, kIkLimbs * kIkGoalFloats);
+  expect_refused(j, "goals written over the gait state", untouched);
+  j = good, j.ik_mode = with_components(good.ik_mode, 2);
+  expect_refused(j, "modes for two limbs only", untouched);
+  LocomotionRig armless = rig;
+  armless.limbs.resize(2);
+  j = good, j.rig = &armless;
+  expect_refused(j, "a rig without arm limbs", untouched);
+
+  const float height = table.f32(kWalkerGait, kGaitHeight)[1];
+  table.f32(kWalkerGait, kGaitHeight)[1] = 0.0f;
+  expect_refused(good, "a walker of zero height", untouched);
+  table.f32(kWalkerGait, kGaitHeight)[1] = height;
+  table.f32(kWalkerGait, kGaitCadenceTarget)[1] = std::numeric_limits<float>::quiet_NaN();
+  expect_refused(good, "a cadence target that is not a number", untouched);
+  table.f32(kWalkerGait, kGaitCadenceTarget)[1] = 100.0f;
+
+  StartWalkingJob start = make_start_walking_job(rig, scene.paths(), table, 2, scene.style());
+  StartWalkingJob s = start;
+  s.walker = 3;
+  expect_refused(s, "walker out of range", untouched);
+  s = start, s.paths = {};
+  expect_refused(s, "no paths", untouched);
+  s = start, s.root_translation = without_base(start.root_translation);
+  expect_refused(s, "no root translation output", untouched);
+
+  EXPECT_TRUE(start.run());
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(untouched());
 }
 
 }  // namespace
