@@ -35,7 +35,7 @@ int first_walker_clip(const Crowd& crowd) {
   const std::vector<Entity> walkers = crowd.world.entities();
   if (walkers.empty()) return kRestPose;
   const EntityLocation at = crowd.world.location(walkers.front());
-  return static_cast<int>(crowd.world.table(at.table).f32(kWalkerClock, 2)[at.block]);
+  return crowd.world.table(at.table).i32(kWalkerClip)[at.block];
 }
 
 struct CrowdOptions {

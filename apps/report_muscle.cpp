@@ -77,10 +77,9 @@ class PosedWalker {
     MuscleGains gains = scene_->skin.gains;
     gains.global = gain;
     set_muscle_gains(*scene_, gains);
-    const WalkerLanes l = scene_->lanes();
-    fk_system(scene_->rig().skeleton, l);
-    muscle_system(scene_->rig().muscles->set, l);
-    skin_system(current_layout(*scene_), l, out_);
+    run_or_throw(make_fk_job(scene_->rig().skeleton, scene_->table(initial_slot(*scene_))), "fk");
+    run_or_throw(make_muscle_job(scene_->rig().muscles->set, scene_->table(initial_slot(*scene_))), "muscle");
+    run_or_throw(make_skin_job(current_layout(*scene_), scene_->table(initial_slot(*scene_)), out_), "skin");
     return out_;
   }
 

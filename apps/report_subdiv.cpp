@@ -185,7 +185,7 @@ struct Point3 {
 };
 
 // Flexes the left elbow and knee by 120 deg (the pose `strata report skin` uses) on walker 0 and reruns FK.
-void flex(const Skeleton& s, const WalkerLanes& lanes) {
+void flex(const Skeleton& s, const WalkerLanes& lanes, SoaTable& walkers) {
   for (std::uint32_t j = 0; j < lanes.joints; ++j)
     for (int c = 0; c < 4; ++c) lanes.local_rotation[(j * 4 + c) * lanes.stride] = c == 3 ? 1.0f : 0.0f;
   for (const char* name : {"l_elbow", "l_knee"}) {
@@ -197,7 +197,7 @@ void flex(const Skeleton& s, const WalkerLanes& lanes) {
     const float xyzw[4] = {q.x, q.y, q.z, q.w};
     for (int c = 0; c < 4; ++c) lanes.local_rotation[(static_cast<std::size_t>(joint) * 4 + c) * lanes.stride] = xyzw[c];
   }
-  fk_system(s, lanes);
+  run_or_throw(make_fk_job(s, walkers), "fk");
 }
 
 int run_subdiv_report(const SubdivReportOptions& o) {
@@ -217,7 +217,6 @@ int run_subdiv_report(const SubdivReportOptions& o) {
     set_detail_level(scene, DetailLevel::none());
     Profiler profiler(8, false);
     for (int f = 0; f < 24; ++f) step(scene, 1.0f / 60.0f, profiler);  // mid-stride: a walking pose
-    const WalkerLanes lanes = scene.lanes();
 
     nlohmann::json out;
     out["threads"] = 1;
@@ -234,7 +233,8 @@ int run_subdiv_report(const SubdivReportOptions& o) {
       level_stride[l] = pad_to_lanes(layout.vertex_count);
       level_out[l].assign(6 * level_stride[l], 0.0f);
       const SkinOutput so = skin_output_in(level_out[l].data(), level_stride[l]);
-      const double ns = time_ns(o, [&] { skin_walker(layout, lanes, 0, so); });
+      const SkinWalkerJob job = make_skin_walker_job(layout, scene.table(initial_slot(scene)), 0, so);
+      const double ns = time_ns(o, [&] { run_or_throw(job, "skin"); });
       routes.push_back({{"route", "skin level " + std::to_string(l)}, {"level", std::to_string(l)},
                         {"vertices", layout.vertex_count}, {"triangles", layout.triangles.size() / 3},
                         {"walker_us", ns / 1000.0}, {"ns_per_vertex", ns / layout.vertex_count}});
@@ -257,7 +257,7 @@ int run_subdiv_report(const SubdivReportOptions& o) {
       std::vector<float> refined(6 * stride);
       const SkinOutput ro = skin_output_in(refined.data(), stride);
       const SkinOutput co = skin_output_in(cage_out.data(), cage_stride);
-      skin_walker(surface.cage_layout, lanes, 0, co);
+      run_or_throw(make_skin_walker_job(surface.cage_layout, scene.table(initial_slot(scene)), 0, co), "skin");
 
       // Level by level (the per-frame path), with its intermediate levels in scratch.
       std::vector<std::vector<float>> scratch;
@@ -302,7 +302,8 @@ int run_subdiv_report(const SubdivReportOptions& o) {
       const double normals_ns = time_ns(o, [&] {
         area_weighted_normals(surface.triangles, n, ro.px, ro.py, ro.pz, ro.nx, ro.ny, ro.nz);
       });
-      const double walker_ns = time_ns(o, [&] { subdiv_walker(surface, lanes, 0, ro); });
+      const SubdivWalkerJob walker_job = make_subdiv_walker_job(surface, scene.table(initial_slot(scene)), 0, ro);
+      const double walker_ns = time_ns(o, [&] { run_or_throw(walker_job, "subdiv"); });
       const double per_v = refine_ns / static_cast<double>(n);
       refine_ok = refine_ok && per_v <= 30.0;
       levels.push_back({{"level", "S" + std::to_string(depth)},
@@ -340,18 +341,18 @@ int run_subdiv_report(const SubdivReportOptions& o) {
       if (std::string(pose) == "rest") {
         for (std::uint32_t j = 0; j < l.joints; ++j)
           for (int c = 0; c < 4; ++c) l.local_rotation[(j * 4 + c) * l.stride] = c == 3 ? 1.0f : 0.0f;
-        fk_system(skeleton, l);
+        run_or_throw(make_fk_job(skeleton, scene.table(initial_slot(scene))), "fk");
       } else {
-        flex(skeleton, l);
+        flex(skeleton, l, scene.table(initial_slot(scene)));
       }
       const std::size_t s0 = pad_to_lanes(level0.vertex_count);
       std::vector<float> l0(6 * s0);
-      skin_walker(level0, l, 0, skin_output_in(l0.data(), s0));
+      run_or_throw(make_skin_walker_job(level0, scene.table(initial_slot(scene)), 0, skin_output_in(l0.data(), s0)), "skin");
       for (int depth = 1; depth <= kMaxSubdivDepth; ++depth) {
         const std::shared_ptr<const SubdivSurface> surface = body_subdiv_surface(body, depth);
         const std::size_t st = pad_to_lanes(surface->vertex_count);
         std::vector<float> r(6 * st);
-        subdiv_walker(*surface, l, 0, skin_output_in(r.data(), st));
+        run_or_throw(make_subdiv_walker_job(*surface, scene.table(initial_slot(scene)), 0, skin_output_in(r.data(), st)), "subdiv");
         const Deviation d = deviation(l0, level0.vertex_count, s0, r, surface->vertex_count, st, surface->triangles);
         dev.push_back({{"pose", pose}, {"level", "S" + std::to_string(depth)}, {"max_deviation_m", d.max_m},
                        {"mean_deviation_m", d.mean_m}});

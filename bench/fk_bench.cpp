@@ -12,6 +12,7 @@
 #include "systems/fk.h"
 #include "scene/crowd.h"
 #include "scene/spawn.h"
+#include "scene/body_settings.h"
 #include "scene/step.h"
 
 namespace {
@@ -33,8 +34,9 @@ void BM_FkSingleThread(benchmark::State& state) {
   std::unique_ptr<strata::Crowd> crowd = make_scene(static_cast<std::size_t>(state.range(0)));
   strata::Crowd& scene = *crowd;
   strata::WalkerLanes lanes = scene.lanes();
+  const strata::FkJob job = strata::make_fk_job(scene.rig().skeleton, scene.table(initial_slot(scene)));
   for (auto _ : state) {
-    strata::fk_range(scene.rig().skeleton, lanes, 0, lanes.count);
+    if (!job.run()) state.SkipWithError("invalid FkJob");
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(lanes.count * lanes.joints));
@@ -47,8 +49,9 @@ void BM_AnimationSample(benchmark::State& state) {
   std::unique_ptr<strata::Crowd> crowd = make_scene(static_cast<std::size_t>(state.range(0)));
   strata::Crowd& scene = *crowd;
   strata::WalkerLanes lanes = scene.lanes();
+  const strata::AnimationJob job = strata::make_animation_job(scene.rig(), scene.table(initial_slot(scene)), 1.0f / 60.0f);
   for (auto _ : state) {
-    strata::animation_system(scene.rig(), lanes, 1.0f / 60.0f);
+    if (!job.run()) state.SkipWithError("invalid AnimationJob");
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(lanes.count * lanes.joints));

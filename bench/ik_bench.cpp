@@ -98,8 +98,8 @@ void BM_IkSystemSingleThread(benchmark::State& state) {
       goal(strata::kGoalPx) = g.x, goal(strata::kGoalPy) = g.y, goal(strata::kGoalPz) = g.z;
       goal(strata::kGoalQx) = q.x, goal(strata::kGoalQy) = q.y;
       goal(strata::kGoalQz) = q.z, goal(strata::kGoalQw) = q.w;
-      goal(strata::kGoalMode) =
-          static_cast<float>(k < 2 ? strata::IkMode::PositionOrientation : strata::IkMode::Position);
+      table->i32(strata::kWalkerIkMode, static_cast<std::uint32_t>(k))[block] =
+          static_cast<std::int32_t>(k < 2 ? strata::IkMode::PositionOrientation : strata::IkMode::Position);
     }
     for (std::uint32_t j = 0; j < joints; ++j) {
       const float comp[4] = {pose[j].x, pose[j].y, pose[j].z, pose[j].w};
@@ -108,14 +108,15 @@ void BM_IkSystemSingleThread(benchmark::State& state) {
     for (std::uint32_t c = 0; c < 3; ++c) table->f32(strata::kWalkerRootTranslation, c)[block] = root[c];
   }
   const strata::WalkerLanes lanes = strata::walker_lanes(*table, joints);
+  const strata::IkJob job = strata::make_ik_job(s, limbs, *table);
   for (auto _ : state) {
-    strata::ik_system(s, limbs, lanes);
+    if (!job.run()) state.SkipWithError("invalid IkJob");
     benchmark::ClobberMemory();
   }
   std::size_t reached = 0, moved = 0;
   for (std::size_t w = 0; w < lanes.count; ++w)
     for (std::size_t k = 0; k < limbs.size(); ++k) {
-      const auto flags = static_cast<std::uint32_t>(lanes.ik_result[k * strata::kIkResultFloats * lanes.stride + w]);
+      const std::uint32_t flags = lanes.ik_flags[k * lanes.stride + w];
       reached += (flags & strata::kIkReached) != 0;
       moved += (flags & strata::kIkSwivelMoved) != 0;
     }

@@ -43,13 +43,14 @@ struct Fixture {
   }
 };
 
-// Times skin_walker on walker 0; items are vertices.
-void time_kernel(benchmark::State& state, const SkinLayout& layout, const WalkerLanes& lanes) {
+// Times SkinWalkerJob on walker 0; items are vertices.
+void time_kernel(benchmark::State& state, const SkinLayout& layout, const SoaTable& walkers) {
   const std::size_t padded = pad_to_lanes(layout.vertex_count);
   AlignedBuffer<float> out(6 * padded);
   const SkinOutput soa = skin_output_in(out.data(), padded);
+  const SkinWalkerJob job = make_skin_walker_job(layout, walkers, 0, soa);
   for (auto _ : state) {
-    skin_walker(layout, lanes, 0, soa);
+    if (!job.run()) state.SkipWithError("invalid SkinWalkerJob");
     benchmark::DoNotOptimize(out.data());
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(layout.vertex_count));
@@ -61,7 +62,7 @@ void BM_SkinKernel(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   Fixture f(static_cast<int>(state.range(0)), state.range(1) != 0);
   const SkinLayout& layout = current_layout(*f.scene);
-  time_kernel(state, layout, f.scene->lanes());
+  time_kernel(state, layout, f.scene->table(initial_slot(*f.scene)));
 }
 BENCHMARK(BM_SkinKernel)
     ->ArgsProduct({{0, 1, 2}, {0, 1}})
@@ -73,7 +74,7 @@ void BM_SkinKernelPortable(benchmark::State& state) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   Fixture f(0, state.range(0) != 0);
   force_skin_kernel_isa(SkinKernelIsa::Portable);
-  time_kernel(state, current_layout(*f.scene), f.scene->lanes());
+  time_kernel(state, current_layout(*f.scene), f.scene->table(initial_slot(*f.scene)));
   force_skin_kernel_isa(SkinKernelIsa::Auto);
 }
 BENCHMARK(BM_SkinKernelPortable)->ArgName("muscles")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
@@ -127,7 +128,7 @@ void BM_SkinKernelUniformInfluences(benchmark::State& state) {
     }
   }
   const SkinLayout layout = make_skin_layout(level);
-  time_kernel(state, layout, f.scene->lanes());
+  time_kernel(state, layout, f.scene->table(initial_slot(*f.scene)));
 }
 BENCHMARK(BM_SkinKernelUniformInfluences)->Arg(1)->Arg(2)->Arg(4)->Unit(benchmark::kMicrosecond);
 

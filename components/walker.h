@@ -19,14 +19,15 @@ namespace strata {
 inline constexpr std::uint32_t kAffineFloats = 12;
 inline constexpr std::uint32_t kIkLimbs = 4;          // left leg, right leg, left arm, right arm (systems/ik.h)
 // Per limb goal: position xyz (humanoid space), orientation quaternion xyzw (the lower joint's frame in humanoid
-// space), mode (IkMode as float), swivel offset (rad), pole xyz (humanoid space; all zero = the rig's pole).
-inline constexpr std::uint32_t kIkGoalFloats = 12;
+// space), swivel offset (rad), pole xyz (humanoid space; all zero = the rig's pole). The goal's mode (IkMode) is
+// the integer field kWalkerIkMode, not a float here: a mode stored as 2.0f had to be decoded by range tests
+// (> 1.5 && < 2.5) wherever it was read.
+inline constexpr std::uint32_t kIkGoalFloats = 11;
 enum IkGoalComponent : std::uint32_t {
-  kGoalPx, kGoalPy, kGoalPz, kGoalQx, kGoalQy, kGoalQz, kGoalQw, kGoalMode, kGoalSwivel, kGoalPoleX, kGoalPoleY,
-  kGoalPoleZ
+  kGoalPx, kGoalPy, kGoalPz, kGoalQx, kGoalQy, kGoalQz, kGoalQw, kGoalSwivel, kGoalPoleX, kGoalPoleY, kGoalPoleZ
 };
-// Per limb result: flags (IkFlags as float), position error (m).
-inline constexpr std::uint32_t kIkResultFloats = 2;
+// Per limb result: position error (m). The flags (IkFlags) are the integer field kWalkerIkFlags.
+inline constexpr std::uint32_t kIkResultFloats = 1;
 
 // Locomotion state of a walking walker (systems/locomotion.h). World units (metres, radians) unless noted.
 enum GaitComponent : std::uint32_t {
@@ -35,7 +36,7 @@ enum GaitComponent : std::uint32_t {
   kGaitCadence,         // current cadence (steps/min)
   kGaitCadenceTarget,   // cadence it eases towards (steps/min)
   kGaitHeight,          // body height (m)
-  kGaitPath,            // index of the path it follows (as float)
+                        // (the index of the path it follows is the integer field kWalkerPath)
   kGaitBaseSpeed,       // speed schedule: target speed = base * (1 + amplitude * sin(2 pi t / period + phase));
   kGaitSpeedAmplitude,  //   base <= 0 disables the schedule (kGaitCadenceTarget is then set by the caller)
   kGaitSpeedPhase,
@@ -66,14 +67,18 @@ enum FootLockComponent : std::uint32_t {
 enum WalkerField : std::uint32_t {
   kWalkerPlacement,        // 5: ground position x, y, z (m), heading about +Y (rad), uniform scale (body height /
                            //    rig height); world = T(position) * Ry(heading) * S(scale) * humanoid space
-  kWalkerClock,            // 3: animation time (s), playback rate (1 = real time), clip index (as float)
+  kWalkerClock,            // 2: animation time (s), playback rate (1 = real time)
+  kWalkerClip,             // 1, I32: clip index, or kRestPose (-1) / kAllClips (-2) (systems/animation_sample.h)
   kWalkerLocalRotation,    // joints*4: local joint rotation quaternion x, y, z, w (identity at rest)
   kWalkerRootTranslation,  // 3: HumanoidRoot translation (m), H-Anim's Humanoid-space offset of the root
   kWalkerWorld,            // joints*12: F(j), the joint's frame in humanoid space (paper eq. 2)
   kWalkerSkinning,         // joints*12: F(j) A(j)^-1, rest humanoid space -> posed humanoid space (eq. 3)
   kWalkerIkGoal,           // kIkLimbs*kIkGoalFloats: limb goals, written by locomotion, read by IK
-  kWalkerIkResult,         // kIkLimbs*kIkResultFloats: what IK achieved
+  kWalkerIkResult,         // kIkLimbs*kIkResultFloats: what IK achieved (position error)
+  kWalkerIkMode,           // kIkLimbs, I32: each limb goal's IkMode (0 off, 1 position, 2 position + orientation)
+  kWalkerIkFlags,          // kIkLimbs, U32: each limb's IkFlags from the last IK run
   kWalkerGait,             // kGaitFloats: locomotion state (GaitComponent, LegComponent)
+  kWalkerPath,             // 1, U32: index of the path a walking walker follows (crowd.motion.paths, scene/crowd.h)
   kWalkerFootLock,         // 2*kLockFloats: mocap foot locks (FootLockComponent)
   // Muscle layer (systems/muscle.h), per action-line control point p of the rig's muscle set (P points; a rig
   // without muscles keeps one unused column per field, as a table field cannot be empty):
@@ -88,8 +93,9 @@ enum WalkerField : std::uint32_t {
 std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count,
                                             std::uint32_t muscle_points = 0);
 
-// Raw pointers into a walker table for kernels: component c of a field starts at base + c * stride.
-// Valid until the table grows or shrinks; systems build one per frame.
+// Raw pointers into a walker table: component c of a field starts at base + c * stride. Valid until the table
+// grows or shrinks. Kept for the readers not yet converted to job structs over ColumnViews (lod, gait metrics,
+// pose gathering, the scalar references, tests); the converted systems take views (systems/job.h).
 struct WalkerLanes {
   std::size_t count = 0;   // walkers
   std::size_t stride = 0;  // elements between components; >= count, a multiple of the SIMD lane count
@@ -104,6 +110,10 @@ struct WalkerLanes {
   float* ik_result = nullptr;
   float* gait = nullptr;
   float* foot_lock = nullptr;
+  std::int32_t* clip = nullptr;
+  std::uint32_t* path = nullptr;
+  std::int32_t* ik_mode = nullptr;
+  std::uint32_t* ik_flags = nullptr;
   std::uint32_t muscle_points = 0;  // 0 when the table was made without muscles
   float* muscle_point = nullptr;
   float* muscle_frame = nullptr;

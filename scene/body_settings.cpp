@@ -56,8 +56,15 @@ void rebuild_layouts(Crowd& crowd) {
 }  // namespace
 
 void set_detail_level(Crowd& crowd, DetailLevel level) {
+  const DetailLevel before = crowd.skin.level;
   crowd.skin.requested = level;
   rebuild_layouts(crowd);
+  if (crowd.skin.level == before) return;
+  // Every walker goes to the new level's table at once, so the crowd is consistent between this call and the
+  // next step() (a tool may read a walker's rows in between); with a camera, that step's level-of-detail stage
+  // then culls and levels them again. A level switch is rare, so moving every walker is cheap enough.
+  const std::uint32_t to = crowd.tables[slot_index(initial_slot(crowd))];
+  for (const Entity walker : crowd.world.entities()) crowd.world.move(walker, to);
 }
 
 void set_muscles_enabled(Crowd& crowd, bool on) {

@@ -11,8 +11,9 @@ namespace strata {
 
 // Asks for a detail level. The level used (crowd.skin.level) is the request clamped to what the rig's body has:
 // none without a body, the coarsest mesh level for a higher index, mesh 0 for S levels on a body without a cage.
-// Walkers move to the level's tables during the next step(). Cheap to call at run time: a subdivided surface is
-// built once per rig.
+// When the level used changes, every walker moves to the new level's first table (initial_slot) at once; with a
+// camera, the next step() culls and levels them. Cheap to call at run time: a subdivided surface is built once
+// per rig.
 void set_detail_level(Crowd& crowd, DetailLevel level);
 // Muscle layer on or off (on by default when the rig has one). Off skips the muscle stage and skins without
 // displacement (the layouts are rebuilt without muscle groups).

@@ -10,6 +10,7 @@
 #include "motion/track.h"
 #include "scene/body_settings.h"
 #include "systems/animation_sample.h"
+#include "systems/job.h"
 
 namespace strata {
 namespace {
@@ -126,7 +127,7 @@ Entity spawn_clip_walker(Crowd& crowd, const glm::vec3& position, float heading,
   for (std::uint32_t c = 0; c < 5; ++c) t.f32(kWalkerPlacement, c)[loc.block] = values[c];
   t.f32(kWalkerClock, 0)[loc.block] = phase;
   t.f32(kWalkerClock, 1)[loc.block] = rate;
-  t.f32(kWalkerClock, 2)[loc.block] = static_cast<float>(clip);
+  t.i32(kWalkerClip)[loc.block] = clip;
   // Identity rotations (w = 1) so the walker is in rest pose before its first animation step.
   for (std::uint32_t j = 0; j < crowd.joint_count(); ++j) t.f32(kWalkerLocalRotation, j * 4 + 3)[loc.block] = 1.0f;
   return e;
@@ -142,10 +143,11 @@ Entity spawn_walker(Crowd& crowd, std::uint32_t path, float distance, float phas
   SoaTable& t = crowd.world.table(loc.table);
   const std::pair<std::uint32_t, float> values[] = {
       {kGaitDistance, distance}, {kGaitPhase, phase - std::floor(phase)}, {kGaitCadence, cadence},
-      {kGaitCadenceTarget, cadence}, {kGaitHeight, height}, {kGaitPath, static_cast<float>(path)},
+      {kGaitCadenceTarget, cadence}, {kGaitHeight, height},
       {kGaitBaseSpeed, base_speed}, {kGaitSpeedAmplitude, speed_amplitude}, {kGaitSpeedPhase, speed_phase}};
   for (const auto& [component, value] : values) t.f32(kWalkerGait, component)[loc.block] = value;
-  start_walking(*m.locomotion, m.paths, walker_lanes(t, crowd.joint_count()), loc.block, m.style);
+  t.u32(kWalkerPath)[loc.block] = path;
+  run_or_throw(make_start_walking_job(*m.locomotion, m.paths, t, loc.block, m.style), "start_walking");
   return e;
 }
 

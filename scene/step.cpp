@@ -10,7 +10,10 @@
 #include "systems/animation_sample.h"
 #include "systems/fk.h"
 #include "systems/ik.h"
+#include "systems/locomotion.h"
+#include "systems/mocap_drive.h"
 #include "systems/muscle.h"
+#include "systems/job.h"
 #include "systems/subdiv.h"
 
 namespace strata {
@@ -45,12 +48,12 @@ class StageTimer {
   std::chrono::steady_clock::time_point start_;
 };
 
-// Runs `system(lanes)` over every non-empty walker table, in slot order.
+// Runs `system(table)` over every non-empty walker table, in slot order.
 template <class System>
 void for_each_table(Crowd& crowd, System&& system) {
   for (std::size_t s = 0; s < kDetailSlots; ++s) {
     SoaTable& t = crowd.world.table(crowd.tables[s]);
-    if (t.size() > 0) system(walker_lanes(t, crowd.joint_count()));
+    if (t.size() > 0) system(t);
   }
 }
 
@@ -131,30 +134,32 @@ FrameProfile step(Crowd& crowd, float dt, Profiler& profiler) {
   if (m.source == MotionSource::Walk && m.locomotion) {
     {
       StageTimer t(profiler, profile, Stage::Locomotion);
-      for_each_table(crowd, [&](const WalkerLanes& l) { locomotion_system(*m.locomotion, m.paths, l, dt, m.style); });
+      for_each_table(crowd, [&](SoaTable& t) {
+        run_or_throw(make_locomotion_job(*m.locomotion, m.paths, t, dt, m.style), "locomotion");
+      });
     }
     StageTimer t(profiler, profile, Stage::Ik);
-    for_each_table(crowd, [&](const WalkerLanes& l) { ik_system(rig.skeleton, m.locomotion->limbs, l); });
+    for_each_table(crowd, [&](SoaTable& t) { run_or_throw(make_ik_job(rig.skeleton, m.locomotion->limbs, t), "ik"); });
   } else if (m.source == MotionSource::Mocap && m.mocap_rig) {
     {
       StageTimer t(profiler, profile, Stage::Mocap);
-      for_each_table(crowd, [&](const WalkerLanes& l) { mocap_drive_system(*m.mocap_rig, l, dt); });
+      for_each_table(crowd, [&](SoaTable& t) { run_or_throw(make_mocap_drive_job(*m.mocap_rig, t, dt), "mocap"); });
     }
     StageTimer t(profiler, profile, Stage::Ik);
-    for_each_table(crowd, [&](const WalkerLanes& l) { ik_system(rig.skeleton, m.mocap_rig->limbs, l); });
+    for_each_table(crowd, [&](SoaTable& t) { run_or_throw(make_ik_job(rig.skeleton, m.mocap_rig->limbs, t), "ik"); });
   } else {
     StageTimer t(profiler, profile, Stage::Animation);
-    for_each_table(crowd, [&](const WalkerLanes& l) { animation_system(rig, l, dt); });
+    for_each_table(crowd, [&](SoaTable& t) { run_or_throw(make_animation_job(rig, t, dt), "animation"); });
   }
   // 3. Forward kinematics.
   {
     StageTimer t(profiler, profile, Stage::Fk);
-    for_each_table(crowd, [&](const WalkerLanes& l) { fk_system(rig.skeleton, l); });
+    for_each_table(crowd, [&](SoaTable& t) { run_or_throw(make_fk_job(rig.skeleton, t), "fk"); });
   }
   // 4. Muscles.
   if (crowd.muscles_enabled()) {
     StageTimer t(profiler, profile, Stage::Muscle);
-    for_each_table(crowd, [&](const WalkerLanes& l) { muscle_system(rig.muscles->set, l); });
+    for_each_table(crowd, [&](SoaTable& t) { run_or_throw(make_muscle_job(rig.muscles->set, t), "muscle"); });
   }
   // 5. Level of detail: which table each walker is skinned from.
   CrowdSkin& skin = crowd.skin;
@@ -169,8 +174,9 @@ FrameProfile step(Crowd& crowd, float dt, Profiler& profiler) {
   if (skin.level.is_subdiv()) {
     StageTimer t(profiler, profile, Stage::Subdiv);  // cage skinning + refinement + normals
     SoaTable& table = crowd.table(DetailSlot::Refined);
-    subdiv_system(*skin.subdiv, walker_lanes(table, crowd.joint_count()), crowd.skinned[slot_index(DetailSlot::Refined)],
-                  crowd.muscles_enabled() ? &skin.cage_muscles : nullptr);
+    run_or_throw(make_subdiv_job(*skin.subdiv, table, crowd.skinned[slot_index(DetailSlot::Refined)],
+                                 crowd.muscles_enabled() ? &skin.cage_muscles : nullptr),
+                 "subdiv");
     counts[0] = table.size();
   } else if (!skin.level.is_none()) {
     StageTimer t(profiler, profile, Stage::Skin);
@@ -182,7 +188,7 @@ FrameProfile step(Crowd& crowd, float dt, Profiler& profiler) {
         out.walkers = 0;
         continue;
       }
-      skin_system(skin.layouts[static_cast<std::size_t>(k)], walker_lanes(table, crowd.joint_count()), out);
+      run_or_throw(make_skin_job(skin.layouts[static_cast<std::size_t>(k)], table, out), "skin");
     }
     counts[3] = crowd.table(DetailSlot::Culled).size();
   }

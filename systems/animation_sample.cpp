@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include "components/walker.h"
 
 namespace strata {
 namespace {
@@ -62,20 +65,38 @@ void apply_clip(const AnimationClip& clip, float time, std::span<glm::quat> rota
   }
 }
 
-void animation_system(const Rig& rig, const WalkerLanes& lanes, float dt) {
-  if (lanes.count == 0) return;
+bool AnimationJob::validate() const {
+  if (!rig || !std::isfinite(dt)) return false;
+  const auto joints = static_cast<std::uint32_t>(rig->skeleton.joint_count());
+  const std::size_t n = clip.count;
+  if (joints == 0 || joints > kMaxJointsPerRig || !clip.fits(n, 1) || !rate.fits(n, 1) || !time.fits(n, 1) || !local_rotation.fits(n, joints * 4) ||
+      !root_translation.fits(n, 3))
+    return false;
+  return !time.overlaps(local_rotation) && !time.overlaps(root_translation) &&
+         !local_rotation.overlaps(root_translation) && !time.overlaps(rate) && !time.overlaps(clip) &&
+         !local_rotation.overlaps(rate) && !local_rotation.overlaps(clip) && !root_translation.overlaps(rate) &&
+         !root_translation.overlaps(clip);
+}
+
+bool AnimationJob::run() const {
+  if (!validate()) return false;
+  const std::size_t count = clip.count;
+  if (count == 0) return true;
+  const Rig& rig = *this->rig;
+  const float dt = this->dt;
   const std::size_t joints = rig.skeleton.joint_count();
-  const std::size_t stride = lanes.stride;
-  auto run = [&](std::size_t first, std::size_t last) {
-    std::vector<glm::quat> rotations(joints);
-    float* time = lanes.clock;
-    const float* rate = lanes.clock + stride;
-    const float* clip_index = lanes.clock + 2 * stride;
+  auto sample_range = [&](std::size_t first, std::size_t last) {
+    // On the stack (8 KiB at the joint cap), not a vector per chunk: run() allocates nothing.
+    glm::quat stack[kMaxJointsPerRig];
+    const std::span<glm::quat> rotations(stack, joints);
+    float* time = this->time.base;
+    const float* rate = this->rate.base;
+    const std::int32_t* clip_index = this->clip.base;
     for (std::size_t i = first; i < last; ++i) {
       time[i] += dt * rate[i];
       glm::vec3 root(0.0f);
       std::fill(rotations.begin(), rotations.end(), glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
-      const int c = static_cast<int>(clip_index[i]);
+      const int c = clip_index[i];
       if (c >= 0 && static_cast<std::size_t>(c) < rig.clips.size()) {
         const AnimationClip& clip = rig.clips[c];
         // Keep the clock inside one cycle so float time never loses precision in long runs.
@@ -87,24 +108,32 @@ void animation_system(const Rig& rig, const WalkerLanes& lanes, float dt) {
         for (const AnimationClip& clip : rig.clips) apply_clip(clip, time[i], rotations, root);
       }
       for (std::size_t j = 0; j < joints; ++j) {
-        lanes.local_rotation[(j * 4 + 0) * stride + i] = rotations[j].x;
-        lanes.local_rotation[(j * 4 + 1) * stride + i] = rotations[j].y;
-        lanes.local_rotation[(j * 4 + 2) * stride + i] = rotations[j].z;
-        lanes.local_rotation[(j * 4 + 3) * stride + i] = rotations[j].w;
+        const auto q = static_cast<std::uint32_t>(j * 4);
+        local_rotation.at(q + 0, i) = rotations[j].x;
+        local_rotation.at(q + 1, i) = rotations[j].y;
+        local_rotation.at(q + 2, i) = rotations[j].z;
+        local_rotation.at(q + 3, i) = rotations[j].w;
       }
-      lanes.root_translation[0 * stride + i] = root.x;
-      lanes.root_translation[1 * stride + i] = root.y;
-      lanes.root_translation[2 * stride + i] = root.z;
+      root_translation.at(0, i) = root.x;
+      root_translation.at(1, i) = root.y;
+      root_translation.at(2, i) = root.z;
     }
   };
   constexpr std::size_t kChunk = 256;
-  if (lanes.count <= kChunk) {
-    run(0, lanes.count);
-    return;
+  if (count <= kChunk) {
+    sample_range(0, count);
+    return true;
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lanes.count, kChunk),
-                    [&](const tbb::blocked_range<std::size_t>& r) { run(r.begin(), r.end()); },
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kChunk),
+                    [&](const tbb::blocked_range<std::size_t>& r) { sample_range(r.begin(), r.end()); },
                     tbb::simple_partitioner());
+  return true;
+}
+
+AnimationJob make_animation_job(const Rig& rig, SoaTable& walkers, float dt) {
+  const ColumnView<float> clock = f32_view(walkers, kWalkerClock);
+  return {&rig, dt, i32_view(std::as_const(walkers), kWalkerClip), clock.columns(1, 1), clock.columns(0, 1),
+          f32_view(walkers, kWalkerLocalRotation), f32_view(walkers, kWalkerRootTranslation)};
 }
 
 }  // namespace strata

@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "components/walker.h"
 #include "ecs/aligned_buffer.h"
 
 namespace strata {
@@ -87,10 +88,9 @@ void fk_joint(const float* const q[4], const float* const parent_or_root[kAffine
   }
 }
 
-}  // namespace
-
-void fk_range(const Skeleton& skeleton, const WalkerLanes& lanes, std::size_t first, std::size_t last) {
-  const std::size_t stride = lanes.stride;
+// Walkers [first, last) of a validated job.
+void fk_range(const FkJob& job, std::size_t first, std::size_t last) {
+  const Skeleton& skeleton = *job.skeleton;
   const std::size_t joints = skeleton.joint_count();
   // The chain is accumulated on the skinning matrices G(j) = F(j) A(j)^-1 = G(p) T(c) R T(-c), whose translation
   // is g = G(p).M (c - R c) + g(p). At rest R = I makes c - R c exactly zero, so the rest pose yields exactly the
@@ -98,33 +98,59 @@ void fk_range(const Skeleton& skeleton, const WalkerLanes& lanes, std::size_t fi
   // of ~1e-8 m in every rest skinning matrix; F(j) is then derived as f = M c + g.
   for (std::size_t j = 0; j < joints; ++j) {
     const float* q[4];
-    for (std::size_t k = 0; k < 4; ++k) q[k] = lanes.local_rotation + (j * 4 + k) * stride;
-    const AffineLanes world = joint_matrix(lanes.world, stride, j);
-    const AffineLanes skin = joint_matrix(lanes.skinning, stride, j);
+    for (std::uint32_t k = 0; k < 4; ++k) q[k] = job.local_rotation.component(static_cast<std::uint32_t>(j * 4 + k));
+    const AffineLanes world = joint_matrix(job.world.base, job.world.stride, j);
+    const AffineLanes skin = joint_matrix(job.skinning.base, job.skinning.stride, j);
     const int parent = skeleton.parents[j];
     if (parent < 0) {
-      const float* root[kAffineFloats] = {lanes.root_translation, lanes.root_translation + stride,
-                                          lanes.root_translation + 2 * stride};
+      const float* root[kAffineFloats] = {job.root_translation.component(0), job.root_translation.component(1),
+                                          job.root_translation.component(2)};
       fk_joint<true>(q, root, skeleton.centers[j], world, skin, first, last);
     } else {
-      const AffineLanes p = joint_matrix(lanes.skinning, stride, static_cast<std::size_t>(parent));
+      const AffineLanes p = joint_matrix(job.skinning.base, job.skinning.stride, static_cast<std::size_t>(parent));
       fk_joint<false>(q, p.m, skeleton.centers[j], world, skin, first, last);
     }
   }
 }
 
-void fk_system(const Skeleton& skeleton, const WalkerLanes& lanes) {
-  if (lanes.count == 0) return;
+}  // namespace
+
+bool FkJob::validate() const {
+  if (!skeleton) return false;
+  const std::size_t joints = skeleton->joint_count();
+  if (joints == 0 || skeleton->parents.size() != joints || skeleton->centers.size() != joints) return false;
+  // The chain reads the parent's matrix as already written: parents must come first.
+  for (std::size_t j = 0; j < joints; ++j)
+    if (skeleton->parents[j] >= static_cast<int>(j)) return false;
+  const std::size_t n = local_rotation.count;
+  const auto w = static_cast<std::uint32_t>(joints);
+  if (!local_rotation.fits(n, w * 4) || !root_translation.fits(n, 3) || !world.fits(n, w * kAffineFloats) ||
+      !skinning.fits(n, w * kAffineFloats))
+    return false;
+  return !world.overlaps(skinning) && !world.overlaps(local_rotation) && !world.overlaps(root_translation) &&
+         !skinning.overlaps(local_rotation) && !skinning.overlaps(root_translation);
+}
+
+bool FkJob::run() const {
+  if (!validate()) return false;
+  const std::size_t count = local_rotation.count;
+  if (count == 0) return true;
   // 256 walkers per task: a 25-joint chunk touches ~60 KiB per matrix field, small enough to stay in L2 while
   // the joint loop revisits parents, large enough that task overhead is noise.
   constexpr std::size_t kChunk = 256;
-  if (lanes.count <= kChunk) {
-    fk_range(skeleton, lanes, 0, lanes.count);
-    return;
+  if (count <= kChunk) {
+    fk_range(*this, 0, count);
+    return true;
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lanes.count, kChunk),
-                    [&](const tbb::blocked_range<std::size_t>& r) { fk_range(skeleton, lanes, r.begin(), r.end()); },
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kChunk),
+                    [&](const tbb::blocked_range<std::size_t>& r) { fk_range(*this, r.begin(), r.end()); },
                     tbb::simple_partitioner());
+  return true;
+}
+
+FkJob make_fk_job(const Skeleton& skeleton, SoaTable& walkers) {
+  return {&skeleton, f32_view(walkers, kWalkerLocalRotation), f32_view(walkers, kWalkerRootTranslation),
+          f32_view(walkers, kWalkerWorld), f32_view(walkers, kWalkerSkinning)};
 }
 
 }  // namespace strata

@@ -63,9 +63,9 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
     // solver's own error estimate), and the solver's flags.
     const float scale = l.placement[4 * s + w];
     for (std::uint32_t limb = 0; limb < kIkLimbs; ++limb) {
-      const auto flags = static_cast<std::uint32_t>(l.ik_result[(limb * kIkResultFloats + 0) * s + w]);
+      const std::uint32_t flags = l.ik_flags[limb * s + w];
       const float* goal = l.ik_goal + static_cast<std::size_t>(limb) * kIkGoalFloats * s + w;
-      if (goal[kGoalMode * s] != static_cast<float>(IkMode::Off)) {
+      if (l.ik_mode[limb * s + w] != static_cast<std::int32_t>(IkMode::Off)) {
         const std::int32_t end = rig_.limbs[limb].lower;
         const glm::vec3 reached{l.world[(end * kAffineFloats + 9) * s + w], l.world[(end * kAffineFloats + 10) * s + w],
                                 l.world[(end * kAffineFloats + 11) * s + w]};
@@ -87,7 +87,7 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
 
     const float height = l.gait[kGaitHeight * s + w];
     const GaitParameters gp = gait_parameters(height, std::clamp(cadence, kMinCadence, kMaxCadence));
-    const CardinalSpline& path = paths[static_cast<std::size_t>(l.gait[kGaitPath * s + w])];
+    const CardinalSpline& path = paths[l.path[w]];
     for (int leg = 0; leg < 2; ++leg) {
       LegTrack& t = track.legs[leg];
       const std::size_t base = kGaitLegs + static_cast<std::size_t>(leg) * kLegFloats;

@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include "components/euler.h"
+#include "components/walker.h"
 
 namespace strata {
 namespace {
@@ -502,21 +503,27 @@ struct Frame {
   dvec3 g{0.0};
 };
 
-void ik_range(const Skeleton& skeleton, std::span<const LimbChain> limbs, const WalkerLanes& lanes,
-              const std::vector<std::int32_t>& ancestors, std::size_t first, std::size_t last) {
-  const std::size_t stride = lanes.stride;
-  std::vector<Frame> frames(skeleton.joint_count());
+void ik_range(const IkJob& job, const std::int32_t* ancestors, std::size_t ancestor_count, std::size_t first,
+              std::size_t last) {
+  const Skeleton& skeleton = *job.skeleton;
+  const std::span<const LimbChain> limbs = job.limbs;
+  const std::size_t stride = job.local_rotation.stride;
+  float* const local_rotation = job.local_rotation.base;
+  const ColumnView<const float>& root_translation = job.root_translation;
+  // Indexed by joint; only the ancestors' entries are written and read. On the stack (48 KiB at the joint cap)
+  // rather than a vector per chunk, so run() allocates nothing.
+  Frame frames[kMaxJointsPerRig];
   for (std::size_t i = first; i < last; ++i) {
     // Parent frames of the upper joints, parents first (ancestors is in index order, parents[j] < j).
-    for (const std::int32_t j : ancestors) {
-      const float* q = lanes.local_rotation + static_cast<std::size_t>(j) * 4 * stride + i;
+    for (std::size_t a = 0; a < ancestor_count; ++a) {
+      const std::int32_t j = ancestors[a];
+      const float* q = local_rotation + static_cast<std::size_t>(j) * 4 * stride + i;
       const dmat3 r = quat_matrix(q[0], q[stride], q[2 * stride], q[3 * stride]);
       const dvec3 c(skeleton.centers[j]);
       const int p = skeleton.parents[j];
       Frame& f = frames[j];
       if (p < 0) {
-        const dvec3 root(lanes.root_translation[i], lanes.root_translation[stride + i],
-                         lanes.root_translation[2 * stride + i]);
+        const dvec3 root(root_translation.at(0, i), root_translation.at(1, i), root_translation.at(2, i));
         f.m = r;
         f.g = c - r * c + root;
       } else {
@@ -527,24 +534,25 @@ void ik_range(const Skeleton& skeleton, std::span<const LimbChain> limbs, const 
     }
     for (std::size_t k = 0; k < limbs.size(); ++k) {
       const LimbChain& limb = limbs[k];
-      auto goal_at = [&](std::uint32_t c) { return lanes.ik_goal[(k * kIkGoalFloats + c) * stride + i]; };
-      float* flags_out = lanes.ik_result + (k * kIkResultFloats + 0) * stride + i;
-      float* error_out = lanes.ik_result + (k * kIkResultFloats + 1) * stride + i;
-      const float mode_value = goal_at(kGoalMode);
-      // Anything but 1 or 2 (including NaN) reads as Off.
+      const auto limb_index = static_cast<std::uint32_t>(k);
+      auto goal_at = [&](std::uint32_t c) { return job.ik_goal.at(limb_index * kIkGoalFloats + c, i); };
+      std::uint32_t* flags_out = &job.ik_flags.at(limb_index, i);
+      float* error_out = &job.ik_error.at(limb_index * kIkResultFloats + 0, i);
+      const std::int32_t mode_value = job.ik_mode.at(limb_index, i);
+      // Anything but 1 or 2 reads as Off.
       IkMode mode = IkMode::Off;
-      if (mode_value > 0.5f && mode_value < 1.5f)
+      if (mode_value == static_cast<std::int32_t>(IkMode::Position))
         mode = IkMode::Position;
-      else if (mode_value > 1.5f && mode_value < 2.5f)
+      else if (mode_value == static_cast<std::int32_t>(IkMode::PositionOrientation))
         mode = IkMode::PositionOrientation;
       if (mode == IkMode::Off) {
-        *flags_out = 0.0f, *error_out = 0.0f;
+        *flags_out = 0u, *error_out = 0.0f;
         continue;
       }
       const glm::vec3 goal_h(goal_at(kGoalPx), goal_at(kGoalPy), goal_at(kGoalPz));
       if (!is_finite(goal_h)) {
         // Leave the limb as animation posed it: a broken goal must not snap it to rest.
-        *flags_out = static_cast<float>(kIkInvalidInput), *error_out = 0.0f;
+        *flags_out = kIkInvalidInput, *error_out = 0.0f;
         continue;
       }
       Frame parent;
@@ -552,8 +560,7 @@ void ik_range(const Skeleton& skeleton, std::span<const LimbChain> limbs, const 
       if (p >= 0)
         parent = frames[p];
       else
-        parent.g = dvec3(lanes.root_translation[i], lanes.root_translation[stride + i],
-                         lanes.root_translation[2 * stride + i]);
+        parent.g = dvec3(root_translation.at(0, i), root_translation.at(1, i), root_translation.at(2, i));
       const dmat3 to_rest = glm::transpose(parent.m);  // rotation inverse
 
       LimbSolveInput in;
@@ -575,11 +582,11 @@ void ik_range(const Skeleton& skeleton, std::span<const LimbChain> limbs, const 
       const std::int32_t joints[3] = {limb.upper, limb.middle, limb.lower};
       const glm::quat rotations[3] = {r.upper, r.middle, r.lower};
       for (int n = 0; n < 3; ++n) {
-        float* q = lanes.local_rotation + static_cast<std::size_t>(joints[n]) * 4 * stride + i;
+        float* q = local_rotation + static_cast<std::size_t>(joints[n]) * 4 * stride + i;
         q[0] = rotations[n].x, q[stride] = rotations[n].y, q[2 * stride] = rotations[n].z,
         q[3 * stride] = rotations[n].w;
       }
-      *flags_out = static_cast<float>(r.flags);
+      *flags_out = r.flags;
       *error_out = r.position_error;
     }
   }
@@ -587,37 +594,70 @@ void ik_range(const Skeleton& skeleton, std::span<const LimbChain> limbs, const 
 
 }  // namespace
 
-void ik_system(const Skeleton& skeleton, std::span<const LimbChain> limbs, const WalkerLanes& lanes) {
-  if (lanes.count == 0 || limbs.empty()) return;
-  if (limbs.size() > kIkLimbs)
-    throw std::invalid_argument("ik_system: at most " + std::to_string(kIkLimbs) + " limbs have goal columns");
-  if (lanes.joints != skeleton.joint_count())
-    throw std::invalid_argument("ik_system: walker lanes and skeleton disagree on the joint count");
+bool IkJob::validate() const {
+  if (!skeleton || limbs.empty() || limbs.size() > kIkLimbs) return false;
+  const std::size_t joints = skeleton->joint_count();
+  if (joints == 0 || joints > kMaxJointsPerRig || skeleton->parents.size() != joints ||
+      skeleton->centers.size() != joints || skeleton->limits.size() != joints)
+    return false;
+  for (std::size_t j = 0; j < joints; ++j)
+    if (skeleton->parents[j] >= static_cast<int>(j)) return false;
+  auto in_skeleton = [&](std::int32_t j) { return j >= 0 && static_cast<std::size_t>(j) < joints; };
+  for (const LimbChain& limb : limbs)
+    if (!in_skeleton(limb.upper) || !in_skeleton(limb.middle) || !in_skeleton(limb.lower) ||
+        skeleton->parents[limb.middle] != limb.upper || skeleton->parents[limb.lower] != limb.middle)
+      return false;
+  const std::size_t n = local_rotation.count;
+  if (!local_rotation.fits(n, static_cast<std::uint32_t>(joints * 4)) || !root_translation.fits(n, 3) ||
+      !ik_goal.fits(n, kIkLimbs * kIkGoalFloats) || !ik_mode.fits(n, kIkLimbs) ||
+      !ik_error.fits(n, kIkLimbs * kIkResultFloats) || !ik_flags.fits(n, kIkLimbs))
+    return false;
+  return !local_rotation.overlaps(ik_error) && !local_rotation.overlaps(ik_flags) && !ik_error.overlaps(ik_flags) &&
+         !local_rotation.overlaps(ik_goal) && !local_rotation.overlaps(ik_mode) &&
+         !local_rotation.overlaps(root_translation) && !ik_error.overlaps(ik_goal) && !ik_error.overlaps(ik_mode) &&
+         !ik_error.overlaps(root_translation) && !ik_flags.overlaps(ik_goal) && !ik_flags.overlaps(ik_mode) &&
+         !ik_flags.overlaps(root_translation);
+}
+
+bool IkJob::run() const {
+  if (!validate()) return false;
+  const std::size_t count = local_rotation.count;
+  if (count == 0) return true;
   // The union of the upper joints' ancestors, in index order (a parent precedes its children). Limb joints'
   // own rotations are outputs, and an ancestor shared by limbs (root, spine) is composed once per walker.
-  std::vector<char> needed(skeleton.joint_count(), 0);
-  for (const LimbChain& limb : limbs) {
-    check_joint(skeleton, limb.upper, limb);
-    check_joint(skeleton, limb.middle, limb);
-    check_joint(skeleton, limb.lower, limb);
-    for (std::int32_t j = skeleton.parents[limb.upper]; j >= 0; j = skeleton.parents[j]) needed[j] = 1;
-  }
-  std::vector<std::int32_t> ancestors;
-  for (std::size_t j = 0; j < needed.size(); ++j)
-    if (needed[j]) ancestors.push_back(static_cast<std::int32_t>(j));
+  bool needed[kMaxJointsPerRig] = {};
+  for (const LimbChain& limb : limbs)
+    for (std::int32_t j = skeleton->parents[limb.upper]; j >= 0; j = skeleton->parents[j]) needed[j] = true;
+  std::int32_t ancestors[kMaxJointsPerRig];
+  std::size_t ancestor_count = 0;
+  for (std::size_t j = 0; j < skeleton->joint_count(); ++j)
+    if (needed[j]) ancestors[ancestor_count++] = static_cast<std::int32_t>(j);
 
   // 32 walkers per task: ~0.3 us per limb solve makes a task ~40 us, long enough to hide scheduling, short
   // enough to balance a few thousand walkers over the cores (fk's 256 suits its 25x cheaper per-walker work).
   constexpr std::size_t kChunk = 32;
-  if (lanes.count <= kChunk) {
-    ik_range(skeleton, limbs, lanes, ancestors, 0, lanes.count);
-    return;
+  if (count <= kChunk) {
+    ik_range(*this, ancestors, ancestor_count, 0, count);
+    return true;
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lanes.count, kChunk),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kChunk),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      ik_range(skeleton, limbs, lanes, ancestors, r.begin(), r.end());
+                      ik_range(*this, ancestors, ancestor_count, r.begin(), r.end());
                     },
                     tbb::simple_partitioner());
+  return true;
+}
+
+IkJob make_ik_job(const Skeleton& skeleton, std::span<const LimbChain> limbs, SoaTable& walkers) {
+  const SoaTable& read = walkers;
+  return {&skeleton,
+          limbs,
+          f32_view(read, kWalkerIkGoal),
+          i32_view(read, kWalkerIkMode),
+          f32_view(read, kWalkerRootTranslation),
+          f32_view(walkers, kWalkerLocalRotation),
+          f32_view(walkers, kWalkerIkResult),
+          u32_view(walkers, kWalkerIkFlags)};
 }
 
 }  // namespace strata

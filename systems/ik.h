@@ -7,6 +7,10 @@
 //
 // Runs after locomotion (which writes goals, the root and spine rotations) and before FK, whose input rotations
 // it overwrites for the limb joints.
+//
+//   reads:  skeleton (hierarchy, centres, limits), limbs, ik_goal (kIkLimbs*kIkGoalFloats), ik_mode (kIkLimbs,
+//           I32), root_translation (3), local_rotation of the limbs' ancestors (joints*4)
+//   writes: local_rotation of each solved limb's three joints, ik_error (kIkLimbs), ik_flags (kIkLimbs, U32)
 #include <cstdint>
 #include <span>
 #include <string>
@@ -16,7 +20,8 @@
 #include <glm/vec3.hpp>
 
 #include "components/skeleton.h"
-#include "components/walker.h"
+#include "ecs/column_view.h"
+#include "systems/job.h"
 
 namespace strata {
 
@@ -40,10 +45,10 @@ std::vector<LimbChain> make_limbs(const Skeleton& skeleton);
 
 // ---- Single-limb solver (pure maths; the system calls it per walker and limb) ---------------------------------
 
-// Goal modes (stored as floats in the walker's ik_goal columns).
+// Goal modes (the walker's ik_mode field, one integer per limb).
 enum class IkMode : std::uint8_t { Off = 0, Position = 1, PositionOrientation = 2 };
 
-// Result flags, OR-ed (stored as a float in ik_result).
+// Result flags, OR-ed (the walker's ik_flags field, one integer per limb).
 enum IkFlags : std::uint32_t {
   kIkReached = 1u << 0,            // the end effector is on the goal (within 1e-5 m)
   kIkUnreachable = 1u << 1,        // goal beyond reach (or inside the inner reach): clamped just inside, flagged
@@ -51,7 +56,7 @@ enum IkFlags : std::uint32_t {
   kIkLimitsInfeasible = 1u << 3,   // no swivel satisfies the limits: least-violation configuration, flagged
   kIkOrientationClamped = 1u << 4, // the lower joint's rotation needed for the orientation goal broke its limits
   kIkInvalidInput = 1u << 5,       // a non-finite goal, orientation, pole or swivel offset: a non-finite goal leaves
-                                   // the limb at rest (solve_limb) or untouched (ik_system); the others are ignored
+                                   // the limb at rest (solve_limb) or untouched (IkJob); the others are ignored
 };
 
 struct LimbSolveInput {
@@ -78,11 +83,30 @@ LimbSolveResult solve_limb(const Skeleton& skeleton, const LimbChain& limb, cons
 
 // ---- The system --------------------------------------------------------------------------------------------
 
-// Per walker and limb, reads the ik_goal columns (see components/walker.h: goal position in humanoid space, goal
-// orientation, mode, swivel offset), computes the limb's parent frame from the walker's current local rotations
-// (the ancestors of the upper joint, e.g. root, sacroiliac, spine), solves, writes the three joints' local
-// rotations and the ik_result columns (flags, position error). Walkers are independent: oneTBB chunks, output
-// identical for any thread count.
-void ik_system(const Skeleton& skeleton, std::span<const LimbChain> limbs, const WalkerLanes& lanes);
+// Per walker and limb, reads the goal (components/walker.h: position in humanoid space, orientation, swivel
+// offset, pole) and its mode, computes the limb's parent frame from the walker's current local rotations (the
+// ancestors of the upper joint, e.g. root, sacroiliac, spine), solves, and writes the three joints' local
+// rotations, the flags and the position error. A mode other than 1 or 2 reads as Off: the limb keeps its
+// rotations and gets flags 0, error 0. Walkers are independent: oneTBB chunks, output identical for any thread
+// count.
+struct IkJob {
+  const Skeleton* skeleton = nullptr;
+  std::span<const LimbChain> limbs;             // limb k's goal is goal slot k (make_limbs order)
+  ColumnView<const float> ik_goal;              // kIkLimbs*kIkGoalFloats (IkGoalComponent per limb)
+  ColumnView<const std::int32_t> ik_mode;       // kIkLimbs: IkMode per limb
+  ColumnView<const float> root_translation;     // 3
+  ColumnView<float> local_rotation;             // joints*4: ancestors read, limb joints written
+  ColumnView<float> ik_error;                   // kIkLimbs*kIkResultFloats: |effector - goal| (m)
+  ColumnView<std::uint32_t> ik_flags;           // kIkLimbs: IkFlags
+
+  // Skeleton set (parents before children, at most kMaxJointsPerRig joints); 1..kIkLimbs limbs whose joints
+  // are in the skeleton and form a chain; every view with the same rows and its width; outputs not overlapping
+  // each other or an input.
+  bool validate() const;
+  bool run() const;
+};
+
+// The job over every walker of `walkers` (a walker table, components/walker.h).
+IkJob make_ik_job(const Skeleton& skeleton, std::span<const LimbChain> limbs, SoaTable& walkers);
 
 }  // namespace strata

@@ -2,13 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include <glm/gtc/quaternion.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "components/walker.h"
 #include "motion/gait.h"
 
 namespace strata {
@@ -124,19 +127,19 @@ void begin_swing(const GaitRef& g, int leg, const glm::vec3& from, float from_he
   g.leg(leg, kLegSwinging) = 1.0f;
 }
 
-void write_quat(const WalkerLanes& lanes, std::int32_t joint, std::size_t i, const glm::quat& q) {
+void write_quat(const LocomotionColumns& lanes, std::int32_t joint, std::size_t i, const glm::quat& q) {
   if (joint < 0) return;
-  const std::size_t s = lanes.stride;
-  lanes.local_rotation[(joint * 4 + 0) * s + i] = q.x;
-  lanes.local_rotation[(joint * 4 + 1) * s + i] = q.y;
-  lanes.local_rotation[(joint * 4 + 2) * s + i] = q.z;
-  lanes.local_rotation[(joint * 4 + 3) * s + i] = q.w;
+  const auto j = static_cast<std::uint32_t>(joint);
+  lanes.local_rotation.at(j * 4 + 0, i) = q.x;
+  lanes.local_rotation.at(j * 4 + 1, i) = q.y;
+  lanes.local_rotation.at(j * 4 + 2, i) = q.z;
+  lanes.local_rotation.at(j * 4 + 3, i) = q.w;
 }
 
-void write_goal(const WalkerLanes& lanes, std::uint32_t limb, std::size_t i, const glm::vec3& position,
+void write_goal(const LocomotionColumns& lanes, std::uint32_t limb, std::size_t i, const glm::vec3& position,
                 const glm::quat& orientation, IkMode mode) {
-  const std::size_t s = lanes.stride;
-  float* g = lanes.ik_goal + static_cast<std::size_t>(limb) * kIkGoalFloats * s + i;
+  const std::size_t s = lanes.ik_goal.stride;
+  float* g = lanes.ik_goal.component(limb * kIkGoalFloats) + i;
   g[kGoalPx * s] = position.x;
   g[kGoalPy * s] = position.y;
   g[kGoalPz * s] = position.z;
@@ -144,7 +147,7 @@ void write_goal(const WalkerLanes& lanes, std::uint32_t limb, std::size_t i, con
   g[kGoalQy * s] = orientation.y;
   g[kGoalQz * s] = orientation.z;
   g[kGoalQw * s] = orientation.w;
-  g[kGoalMode * s] = static_cast<float>(mode);
+  lanes.ik_mode.at(limb, i) = static_cast<std::int32_t>(mode);
   g[kGoalSwivel * s] = 0.0f;
   g[kGoalPoleX * s] = g[kGoalPoleY * s] = g[kGoalPoleZ * s] = 0.0f;  // the rig's pole
 }
@@ -190,13 +193,12 @@ GaitParameters current_gait(const GaitRef& g) {
   return gait_parameters(g[kGaitHeight], std::clamp(g[kGaitCadence], kMinCadence, kMaxCadence));
 }
 
-void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
+void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const LocomotionColumns& lanes,
               std::size_t i, float dt, const GaitStyle& style) {
-  const std::size_t st = lanes.stride;
-  GaitRef g{lanes.gait, st, i};
-  const CardinalSpline& path = paths[std::min<std::size_t>(static_cast<std::size_t>(std::max(g[kGaitPath], 0.0f)),
-                                                           paths.size() - 1)];
-  float& time = lanes.clock[0 * st + i];
+  GaitRef g{lanes.gait.base, lanes.gait.stride, i};
+  // An index past the scene's paths follows the last one (a caller that shrank the path list keeps walking).
+  const CardinalSpline& path = paths[std::min<std::size_t>(lanes.path.at(0, i), paths.size() - 1)];
+  float& time = lanes.time.at(0, i);
   time += dt;
 
   // Speed schedule -> cadence target -> eased cadence. Phase and distance integrate it: no pop on change.
@@ -219,11 +221,11 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
   const float scale = g[kGaitHeight] / rig.rig_height;
   const Pose2 pelvis = path_pose(path, g[kGaitDistance]);
   const WalkerFrame frame{pelvis.position, pelvis.heading, scale};
-  lanes.placement[0 * st + i] = pelvis.position.x;
-  lanes.placement[1 * st + i] = 0.0f;
-  lanes.placement[2 * st + i] = pelvis.position.z;
-  lanes.placement[3 * st + i] = pelvis.heading;
-  lanes.placement[4 * st + i] = scale;
+  lanes.placement.at(0, i) = pelvis.position.x;
+  lanes.placement.at(1, i) = 0.0f;
+  lanes.placement.at(2, i) = pelvis.position.z;
+  lanes.placement.at(3, i) = pelvis.heading;
+  lanes.placement.at(4, i) = scale;
 
   // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
   const float sf = gp.stance_fraction();
@@ -348,9 +350,9 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
   // plain min leaves a corner (an 8 mm/frame change of vertical speed at 60 fps).
   const float envelope = smooth_min(past, future, 0.025f);
   root_translation.y = std::min(smooth_min(root_translation.y, envelope, 0.03f), now_limit);
-  lanes.root_translation[0 * st + i] = root_translation.x;
-  lanes.root_translation[1 * st + i] = root_translation.y;
-  lanes.root_translation[2 * st + i] = root_translation.z;
+  lanes.root_translation.at(0, i) = root_translation.x;
+  lanes.root_translation.at(1, i) = root_translation.y;
+  lanes.root_translation.at(2, i) = root_translation.z;
 
   // ---- Rotations the IK does not own: root, pelvis, spine counter-rotation, toes ---------------------------
   write_quat(lanes, rig.root, i, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
@@ -448,12 +450,58 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
   return rig;
 }
 
-void start_walking(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
-                   std::size_t i, const GaitStyle& style) {
-  const std::size_t st = lanes.stride;
-  GaitRef g{lanes.gait, st, i};
-  const CardinalSpline& path = paths[std::min<std::size_t>(static_cast<std::size_t>(std::max(g[kGaitPath], 0.0f)),
-                                                           paths.size() - 1)];
+namespace {
+
+// Whether `columns` fit `rig` for walkers [0, count): widths, rows, every joint the system writes inside the
+// rotations, no two views overlapping.
+bool columns_fit(const LocomotionColumns& c, const LocomotionRig& rig, std::size_t count) {
+  if (c.local_rotation.components == 0 || c.local_rotation.components % 4 != 0) return false;
+  const std::size_t joints = c.local_rotation.components / 4;
+  if (!c.path.fits(count, 1) || !c.gait.fits(count, kGaitFloats) || !c.time.fits(count, 1) ||
+      !c.placement.fits(count, 5) || !c.root_translation.fits(count, 3) ||
+      !c.local_rotation.fits(count, c.local_rotation.components) || !c.ik_goal.fits(count, kIkLimbs * kIkGoalFloats) ||
+      !c.ik_mode.fits(count, kIkLimbs))
+    return false;
+  auto in_rig = [&](std::int32_t j, bool optional) {
+    return (optional && j < 0) || (j >= 0 && static_cast<std::size_t>(j) < joints);
+  };
+  if (rig.limbs.size() != kIkLimbs || !in_rig(rig.root, false) || !in_rig(rig.sacroiliac, true) ||
+      !in_rig(rig.spine, true) || !in_rig(rig.ball[0], true) || !in_rig(rig.ball[1], true) || !(rig.rig_height > 0.0f))
+    return false;
+  const ColumnView<const float> floats[] = {c.gait, c.time, c.placement, c.root_translation, c.local_rotation,
+                                            c.ik_goal};
+  for (std::size_t a = 0; a < std::size(floats); ++a) {
+    if (floats[a].overlaps(c.path) || floats[a].overlaps(c.ik_mode)) return false;
+    for (std::size_t b = a + 1; b < std::size(floats); ++b)
+      if (floats[a].overlaps(floats[b])) return false;
+  }
+  return !c.path.overlaps(c.ik_mode);
+}
+
+// The walker state gait_parameters would otherwise throw on half-way through a frame: a height that is not
+// positive and finite, or a cadence or cadence target that is not finite (the speed schedule's targets always
+// are: cadence_for_speed clamps). Data, not layout, but cheap: three loads per walker against ~4 us of walking.
+bool gait_state_valid(const ColumnView<float>& gait, std::size_t i) {
+  const float height = gait.at(kGaitHeight, i);
+  return height > 0.0f && std::isfinite(height) && std::isfinite(gait.at(kGaitCadence, i)) &&
+         std::isfinite(gait.at(kGaitCadenceTarget, i));
+}
+
+}  // namespace
+
+bool StartWalkingJob::validate() const {
+  return rig && style && !paths.empty() && walker < path.count && columns_fit(*this, *rig, path.count) &&
+         gait_state_valid(gait, walker);
+}
+
+bool StartWalkingJob::run() const {
+  if (!validate()) return false;
+  const LocomotionRig& rig = *this->rig;
+  const GaitStyle& style = *this->style;
+  const LocomotionColumns& lanes = *this;
+  const std::size_t i = walker;
+  GaitRef g{lanes.gait.base, lanes.gait.stride, i};
+  const CardinalSpline& path = paths[std::min<std::size_t>(lanes.path.at(0, i), paths.size() - 1)];
   if (g[kGaitBaseSpeed] > 0.0f)
     g[kGaitCadenceTarget] = cadence_for_speed(
         g[kGaitBaseSpeed] * (1.0f + g[kGaitSpeedAmplitude] * std::sin(g[kGaitSpeedPhase])), g[kGaitHeight]);
@@ -482,17 +530,46 @@ void start_walking(const LocomotionRig& rig, std::span<const CardinalSpline> pat
   g[kGaitDipAge] = 10.0f;
   // Settle placement and goals for time "now" without advancing it.
   walk_one(rig, paths, lanes, i, 0.0f, style);
+  return true;
 }
 
-void locomotion_system(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
-                       float dt, const GaitStyle& style) {
-  if (lanes.count == 0 || paths.empty()) return;
+bool LocomotionJob::validate() const {
+  if (!rig || !style || paths.empty() || !std::isfinite(dt) || !columns_fit(*this, *rig, path.count)) return false;
+  for (std::size_t i = 0; i < path.count; ++i)
+    if (!gait_state_valid(gait, i)) return false;
+  return true;
+}
+
+bool LocomotionJob::run() const {
+  if (!validate()) return false;
   constexpr std::size_t kChunk = 64;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lanes.count, kChunk),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, path.count, kChunk),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i < r.end(); ++i) walk_one(rig, paths, lanes, i, dt, style);
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) walk_one(*rig, paths, *this, i, dt, *style);
                     },
                     tbb::simple_partitioner());
+  return true;
+}
+
+LocomotionColumns locomotion_columns(SoaTable& walkers) {
+  return {u32_view(std::as_const(walkers), kWalkerPath),
+          f32_view(walkers, kWalkerGait),
+          f32_view(walkers, kWalkerClock).columns(0, 1),
+          f32_view(walkers, kWalkerPlacement),
+          f32_view(walkers, kWalkerRootTranslation),
+          f32_view(walkers, kWalkerLocalRotation),
+          f32_view(walkers, kWalkerIkGoal),
+          i32_view(walkers, kWalkerIkMode)};
+}
+
+LocomotionJob make_locomotion_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths, SoaTable& walkers,
+                                  float dt, const GaitStyle& style) {
+  return {locomotion_columns(walkers), &rig, paths, &style, dt};
+}
+
+StartWalkingJob make_start_walking_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths,
+                                       SoaTable& walkers, std::size_t walker, const GaitStyle& style) {
+  return {locomotion_columns(walkers), &rig, paths, &style, walker};
 }
 
 }  // namespace strata

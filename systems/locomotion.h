@@ -14,15 +14,22 @@
 //
 // Cadence may change at any time: phase and distance integrate it, footprints are placed once at toe-off, so a
 // change never moves a planted foot or pops the pelvis.
+//
+//   reads:  rig (limbs, rest joint centres, reach, wrist paths), paths, style, dt, path (U32)
+//   writes: gait (kGaitFloats, read and written), time (clock component 0), placement (5), root_translation (3),
+//           local_rotation of root, sacroiliac, spine and midtarsals, ik_goal (kIkLimbs*kIkGoalFloats),
+//           ik_mode (kIkLimbs, I32)
+#include <cstdint>
 #include <span>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "components/skeleton.h"
-#include "components/walker.h"
+#include "ecs/column_view.h"
 #include "motion/cardinal_spline.h"
 #include "systems/ik.h"
+#include "systems/job.h"
 
 namespace strata {
 
@@ -67,15 +74,53 @@ struct LocomotionRig {
 // Throws std::invalid_argument when the skeleton lacks a limb joint or the midtarsal joints.
 LocomotionRig make_locomotion_rig(const Skeleton& skeleton);
 
-// Places a walker at `distance` along `path` with its gait state consistent with `phase` (both feet on their
-// footprints, the swing foot mid-arc), so the first frame needs no settling. Writes the walker's gait, placement
-// and clock columns for walker `i` of `lanes`.
-void start_walking(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
-                   std::size_t i, const GaitStyle& style);
+// The walker columns locomotion reads and writes; both jobs below have them as their first members.
+struct LocomotionColumns {
+  ColumnView<const std::uint32_t> path;  // 1: index into the job's paths (past the end: the last path)
+  ColumnView<float> gait;                // kGaitFloats: GaitComponent / LegComponent state, read and written
+  ColumnView<float> time;                // 1: the walker clock's time (s), advanced by dt
+  ColumnView<float> placement;           // 5: ground position, heading, scale, written
+  ColumnView<float> root_translation;    // 3: pelvis bob and sway (humanoid units), written
+  ColumnView<float> local_rotation;      // joints*4: root, sacroiliac, spine, midtarsal rotations written
+  ColumnView<float> ik_goal;             // kIkLimbs*kIkGoalFloats: ankle and wrist goals, written
+  ColumnView<std::int32_t> ik_mode;      // kIkLimbs: legs PositionOrientation, arms Position, written
+};
+// Views of those columns over every walker of `walkers` (a walker table, components/walker.h).
+LocomotionColumns locomotion_columns(SoaTable& walkers);
+
+// Places walker `walker` at its gait distance along its path with its gait state consistent with its phase
+// (both feet on their footprints, the swing foot mid-arc), so the first frame needs no settling. Reads the gait
+// fields the spawner set (distance, phase, cadence, height, speed schedule) and writes the rest of the walker's
+// locomotion columns, as one frame of dt = 0 would.
+struct StartWalkingJob : LocomotionColumns {
+  const LocomotionRig* rig = nullptr;
+  std::span<const CardinalSpline> paths;
+  const GaitStyle* style = nullptr;
+  std::size_t walker = 0;
+
+  // Rig (four limbs, joints inside the rotations) and style set, paths non-empty, walker in range, every view
+  // with the same rows and its width, no two views overlapping; the walker's gait height positive and finite,
+  // its cadence and cadence target finite (the gait formulas refuse anything else).
+  bool validate() const;
+  bool run() const;
+};
 
 // One frame for every walker: advances time by dt and writes placement, root translation, pelvis and spine
 // rotations, and IK goals for all four limbs. Walkers are independent (oneTBB chunks, deterministic).
-void locomotion_system(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const WalkerLanes& lanes,
-                       float dt, const GaitStyle& style);
+struct LocomotionJob : LocomotionColumns {
+  const LocomotionRig* rig = nullptr;
+  std::span<const CardinalSpline> paths;
+  const GaitStyle* style = nullptr;
+  float dt = 0.0f;
+
+  // As StartWalkingJob's, with dt finite instead of a walker, and the gait state checked for every walker.
+  bool validate() const;
+  bool run() const;
+};
+
+LocomotionJob make_locomotion_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths, SoaTable& walkers,
+                                  float dt, const GaitStyle& style);
+StartWalkingJob make_start_walking_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths,
+                                       SoaTable& walkers, std::size_t walker, const GaitStyle& style);
 
 }  // namespace strata

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <span>
 #include <stdexcept>
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "components/walker.h"
 #include "systems/animation_sample.h"
 
 namespace strata {
@@ -47,12 +50,10 @@ namespace {
 
 // One leg's lock, in the walker's foot_lock columns.
 struct LockRef {
-  const WalkerLanes& lanes;
+  const ColumnView<float>& foot_lock;
   std::size_t walker;
   int leg;
-  float& at(std::uint32_t c) const {
-    return lanes.at(lanes.foot_lock, static_cast<std::size_t>(leg) * kLockFloats + c)[walker];
-  }
+  float& at(std::uint32_t c) const { return foot_lock.at(static_cast<std::uint32_t>(leg) * kLockFloats + c, walker); }
   bool locked() const { return at(kLockOn) > 0.5f; }
   void set_locked(bool on) const { at(kLockOn) = on ? 1.0f : 0.0f; }
   int interval() const { return static_cast<int>(at(kLockInterval)); }
@@ -67,21 +68,48 @@ struct LockRef {
 
 }  // namespace
 
-void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt) {
-  if (!rig.skeleton || !rig.clip || !rig.contacts) throw std::invalid_argument("mocap_drive_system: incomplete MocapRig");
-  if (lanes.count == 0) return;
+bool MocapDriveJob::validate() const {
+  if (!rig || !rig->skeleton || !rig->clip || !rig->contacts || !std::isfinite(dt)) return false;
+  const std::size_t joints = rig->skeleton->joint_count();
+  if (joints == 0 || joints > kMaxJointsPerRig || rig->limbs.size() < 2) return false;
+  for (int leg = 0; leg < 2; ++leg)
+    if (rig->limbs[leg].upper < 0 || std::size_t(rig->limbs[leg].upper) >= joints || rig->limbs[leg].lower < 0 ||
+        std::size_t(rig->limbs[leg].lower) >= joints)
+      return false;
+  const std::size_t n = time.count;
+  if (!rate.fits(n, 1) || !time.fits(n, 1) || !placement.fits(n, 5) || !foot_lock.fits(n, 2 * kLockFloats) ||
+      !local_rotation.fits(n, static_cast<std::uint32_t>(joints * 4)) || !root_translation.fits(n, 3) ||
+      !ik_goal.fits(n, kIkLimbs * kIkGoalFloats) || !ik_mode.fits(n, kIkLimbs))
+    return false;
+  const ColumnView<const float> floats[] = {rate, time, placement, foot_lock, local_rotation, root_translation,
+                                            ik_goal};
+  for (std::size_t a = 0; a < std::size(floats); ++a) {
+    if (floats[a].overlaps(ik_mode)) return false;
+    for (std::size_t b = a + 1; b < std::size(floats); ++b)
+      if (floats[a].overlaps(floats[b])) return false;
+  }
+  return true;
+}
+
+bool MocapDriveJob::run() const {
+  if (!validate()) return false;
+  const MocapRig& rig = *this->rig;
+  const float dt = this->dt;
   const Skeleton& skeleton = *rig.skeleton;
   const std::size_t joints = skeleton.joint_count();
   const float duration = rig.clip->duration;
   const std::int32_t ankles[2] = {rig.limbs[kLeftLeg].lower, rig.limbs[kRightLeg].lower};
-  std::vector<glm::quat> local(joints), global(joints);
-  std::vector<glm::vec3> pos(joints);
-  for (std::size_t i = 0; i < lanes.count; ++i) {
-    float& time = lanes.at(lanes.clock, 0)[i];
-    const float rate = lanes.at(lanes.clock, 1)[i];
-    float* place[4] = {&lanes.at(lanes.placement, 0)[i], &lanes.at(lanes.placement, 1)[i],
-                       &lanes.at(lanes.placement, 2)[i], &lanes.at(lanes.placement, 3)[i]};
-    const float scale = lanes.at(lanes.placement, 4)[i];
+  // On the stack (22 KiB at the joint cap) rather than three vectors per frame: run() allocates nothing.
+  glm::quat local_storage[kMaxJointsPerRig], global_storage[kMaxJointsPerRig];
+  glm::vec3 pos_storage[kMaxJointsPerRig];
+  const std::span<glm::quat> local(local_storage, joints), global(global_storage, joints);
+  const std::span<glm::vec3> pos(pos_storage, joints);
+  const std::size_t count = this->time.count;
+  for (std::size_t i = 0; i < count; ++i) {
+    float& time = this->time.at(0, i);
+    const float rate = this->rate.at(0, i);
+    float* place[4] = {&placement.at(0, i), &placement.at(1, i), &placement.at(2, i), &placement.at(3, i)};
+    const float scale = placement.at(4, i);
     const glm::quat heading = glm::angleAxis(*place[3], glm::vec3(0, 1, 0));
     time += dt * rate;
     if (!std::isfinite(time)) time = 0.0f;
@@ -101,23 +129,23 @@ void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt)
     glm::vec3 root(0.0f);
     sample_clip(*rig.clip, time, local, root);
     for (std::size_t j = 0; j < joints; ++j)
-      for (int c = 0; c < 4; ++c) lanes.at(lanes.local_rotation, j * 4 + c)[i] = local[j][c];
-    for (int c = 0; c < 3; ++c) lanes.at(lanes.root_translation, c)[i] = root[c];
+      for (int c = 0; c < 4; ++c) local_rotation.at(static_cast<std::uint32_t>(j * 4 + c), i) = local[j][c];
+    for (int c = 0; c < 3; ++c) root_translation.at(static_cast<std::uint32_t>(c), i) = root[c];
     pose_globals(skeleton, local, root, global, pos);
 
     const glm::vec3 origin(*place[0], *place[1], *place[2]);
     for (int leg = 0; leg < 2; ++leg) {
-      LockRef s{lanes, i, leg};
-      float* goal = lanes.ik_goal;
+      LockRef s{foot_lock, i, leg};
       auto set = [&](std::uint32_t component, float v) {
-        lanes.at(goal, static_cast<std::size_t>(leg) * kIkGoalFloats + component)[i] = v;
+        ik_goal.at(static_cast<std::uint32_t>(leg) * kIkGoalFloats + component, i) = v;
       };
+      auto set_mode = [&](IkMode mode) { ik_mode.at(static_cast<std::uint32_t>(leg), i) = static_cast<std::int32_t>(mode); };
       const int interval = rig.contacts->stance_at(leg, time);
       if (wraps != 0) s.set_interval(-1);  // a new loop: never carry a lock over (see the header)
       if (interval < 0) {
         s.set_locked(false);
         s.set_interval(-1);
-        set(kGoalMode, static_cast<float>(IkMode::Off));
+        set_mode(IkMode::Off);
         continue;
       }
       const std::int32_t ankle = ankles[leg];
@@ -135,7 +163,7 @@ void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt)
         if (glm::length(held - pos[rig.limbs[leg].upper]) > rig.reach[leg]) s.set_locked(false);
       }
       if (!s.locked()) {
-        set(kGoalMode, static_cast<float>(IkMode::Off));
+        set_mode(IkMode::Off);
         continue;
       }
       // World -> this frame's humanoid space; the placement may have moved since the lock (a wrap never keeps one,
@@ -149,15 +177,29 @@ void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt)
       set(kGoalQy, q.y);
       set(kGoalQz, q.z);
       set(kGoalQw, q.w);
-      set(kGoalMode, static_cast<float>(IkMode::PositionOrientation));
+      set_mode(IkMode::PositionOrientation);
       set(kGoalSwivel, 0.0f);
       set(kGoalPoleX, 0.0f);
       set(kGoalPoleY, 0.0f);
       set(kGoalPoleZ, 0.0f);
     }
-    for (std::uint32_t arm : {kLeftArm, kRightArm})
-      lanes.at(lanes.ik_goal, arm * kIkGoalFloats + kGoalMode)[i] = static_cast<float>(IkMode::Off);
+    for (std::uint32_t arm : {kLeftArm, kRightArm}) ik_mode.at(arm, i) = static_cast<std::int32_t>(IkMode::Off);
   }
+  return true;
+}
+
+MocapDriveJob make_mocap_drive_job(const MocapRig& rig, SoaTable& walkers, float dt) {
+  const ColumnView<float> clock = f32_view(walkers, kWalkerClock);
+  return {&rig,
+          dt,
+          clock.columns(1, 1),
+          clock.columns(0, 1),
+          f32_view(walkers, kWalkerPlacement),
+          f32_view(walkers, kWalkerFootLock),
+          f32_view(walkers, kWalkerLocalRotation),
+          f32_view(walkers, kWalkerRootTranslation),
+          f32_view(walkers, kWalkerIkGoal),
+          i32_view(walkers, kWalkerIkMode)};
 }
 
 }  // namespace strata

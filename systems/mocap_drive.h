@@ -3,8 +3,13 @@
 // forward across loops, and locks each foot where it landed for as long as the clip says it is in stance, by
 // writing leg goals for the IK system (systems/ik.h).
 //
-// Frame order for mocap walkers: mocap_drive_system (clock, pose, root motion, leg goals) -> ik_system -> fk_system.
-// It replaces animation_system for them: it advances the walker clock itself.
+// Frame order for mocap walkers: MocapDriveJob (clock, pose, root motion, leg goals) -> IkJob -> FkJob.
+// It replaces AnimationJob for them: it advances the walker clock itself.
+//
+//   reads:  rig (skeleton, clip, stance intervals, limbs, loop displacement, reach), dt, rate (clock component 1),
+//           placement heading and scale
+//   writes: time (clock component 0), placement position (advanced per loop), foot_lock (2*kLockFloats, read and
+//           written), local_rotation (joints*4), root_translation (3), ik_goal of the legs, ik_mode (all limbs)
 #include <cstdint>
 #include <vector>
 
@@ -12,9 +17,10 @@
 
 #include "components/animation_clip.h"
 #include "components/skeleton.h"
-#include "components/walker.h"
+#include "ecs/column_view.h"
 #include "motion/retarget.h"
 #include "systems/ik.h"
+#include "systems/job.h"
 
 namespace strata {
 
@@ -41,7 +47,26 @@ MocapRig make_mocap_rig(const Skeleton& skeleton, const AnimationClip& clip, con
 // its stance once it leaves the leg's reach (see kMocapReachFraction); the foot then follows the clip (no blend). A wrap releases the locks: the clip
 // is not a seamless cycle, so a lock from the previous loop's last frames would not fit the next loop's pose.
 // The lock state lives in the walker's foot_lock columns (components/walker.h), so it moves with the walker
-// when the table swap-removes.
-void mocap_drive_system(const MocapRig& rig, const WalkerLanes& lanes, float dt);
+// when the table swap-removes. Walkers run one after another (as before the job: ~1 us each).
+struct MocapDriveJob {
+  const MocapRig* rig = nullptr;
+  float dt = 0.0f;
+  ColumnView<const float> rate;        // 1: playback rate
+  ColumnView<float> time;              // 1: clip time (s), read, advanced and wrapped
+  ColumnView<float> placement;         // 5: heading and scale read; position advanced by whole loops
+  ColumnView<float> foot_lock;         // 2*kLockFloats: FootLockComponent per leg, read and written
+  ColumnView<float> local_rotation;    // joints*4
+  ColumnView<float> root_translation;  // 3
+  ColumnView<float> ik_goal;           // kIkLimbs*kIkGoalFloats: the legs' goals written when locked
+  ColumnView<std::int32_t> ik_mode;    // kIkLimbs: every limb's mode written
+
+  // Rig complete (skeleton at most kMaxJointsPerRig joints, clip, contacts, both leg limbs in the skeleton);
+  // dt finite; every view with the same rows and its width; no two views overlapping.
+  bool validate() const;
+  bool run() const;
+};
+
+// The job over every walker of `walkers` (a walker table, components/walker.h).
+MocapDriveJob make_mocap_drive_job(const MocapRig& rig, SoaTable& walkers, float dt);
 
 }  // namespace strata

@@ -1,12 +1,15 @@
 #include "systems/muscle.h"
 
 #include <cmath>
+#include <utility>
 #include <stdexcept>
 #include <vector>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include "components/walker.h"
 
 namespace strata {
 namespace {
@@ -23,9 +26,9 @@ struct Affine {
   }
 };
 
-Affine skinning_of(const WalkerLanes& lanes, std::size_t walker, std::int32_t joint) {
+Affine skinning_of(const ColumnView<const float>& skinning, std::size_t walker, std::int32_t joint) {
   Affine a;
-  for (int c = 0; c < 12; ++c) a.m[c] = lanes.at(lanes.skinning, std::size_t(joint) * kAffineFloats + c)[walker];
+  for (std::uint32_t c = 0; c < 12; ++c) a.m[c] = skinning.at(static_cast<std::uint32_t>(joint) * kAffineFloats + c, walker);
   return a;
 }
 
@@ -35,13 +38,13 @@ glm::vec3 perpendicular(const glm::vec3& z) {
   return glm::normalize(glm::cross(z, other));
 }
 
-}  // namespace
-
-void muscle_walker(const MuscleSet& set, const WalkerLanes& lanes, std::size_t w) {
+// One walker of a validated job.
+void muscle_walker(const MuscleJob& job, std::size_t w) {
+  const MuscleSet& set = *job.set;
   float lengths[64];
   for (const ActionLine& line : set.lines) {
-    const Affine so = skinning_of(lanes, w, line.origin_joint);
-    const Affine si = skinning_of(lanes, w, line.insertion_joint);
+    const Affine so = skinning_of(job.skinning, w, line.origin_joint);
+    const Affine si = skinning_of(job.skinning, w, line.insertion_joint);
     const glm::vec3 origin = so.point(line.origin_rest);
     const glm::vec3 insertion = si.point(line.insertion_rest);
     action_line_point_lengths(origin, insertion, line.point_count, lengths);
@@ -58,33 +61,65 @@ void muscle_walker(const MuscleSet& set, const WalkerLanes& lanes, std::size_t w
     for (std::uint32_t k = 0; k < line.point_count; ++k) {
       const std::uint32_t p = line.first_point + k;
       const glm::vec3 position = action_line_point(origin, insertion, k, line.point_count);
-      for (int c = 0; c < 3; ++c) lanes.at(lanes.muscle_point, p * 3 + c)[w] = position[c];
-      for (int c = 0; c < 3; ++c) lanes.at(lanes.muscle_frame, p * 6 + c)[w] = y[c];
-      for (int c = 0; c < 3; ++c) lanes.at(lanes.muscle_frame, p * 6 + 3 + c)[w] = z[c];
+      for (int c = 0; c < 3; ++c) job.point.at(p * 3 + c, w) = position[c];
+      for (int c = 0; c < 3; ++c) job.frame.at(p * 6 + c, w) = y[c];
+      for (int c = 0; c < 3; ++c) job.frame.at(p * 6 + 3 + c, w) = z[c];
       const float rest = set.rest_length[p];
       const float l = lengths[k];
       // The clamp keeps a collapsed segment finite; `!(l >= floor)` also catches a NaN length.
       const float floor = set.min_length_ratio * rest;
       const float used = !(l >= floor) ? floor : l;
-      lanes.at(lanes.muscle_length, p)[w] = l;
-      lanes.at(lanes.muscle_force, p)[w] = rest / used - 1.0f;
+      job.length.at(p, w) = l;
+      job.force.at(p, w) = rest / used - 1.0f;
     }
   }
 }
 
-void muscle_system(const MuscleSet& set, const WalkerLanes& lanes) {
-  if (set.point_count == 0 || lanes.count == 0) return;
-  if (lanes.muscle_points != set.point_count)
-    throw std::invalid_argument("muscle_system: walker table has " + std::to_string(lanes.muscle_points) +
-                                " control point columns, the set has " + std::to_string(set.point_count));
-  for (const ActionLine& line : set.lines)
-    if (line.point_count > 64 || std::size_t(line.origin_joint) >= lanes.joints ||
-        std::size_t(line.insertion_joint) >= lanes.joints)
-      throw std::invalid_argument("muscle_system: line '" + line.name + "' does not fit this rig");
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lanes.count, 64),
+}  // namespace
+
+bool MuscleJob::validate() const {
+  if (!set) return false;
+  const std::uint32_t points = set->point_count;
+  if (points < 2 || points > kMaxMusclePoints || set->rest_length.size() != points) return false;
+  if (skinning.components % kAffineFloats != 0) return false;
+  const std::size_t joints = skinning.components / kAffineFloats;
+  for (const ActionLine& line : set->lines)
+    if (line.point_count < 2 || line.point_count > 64 || line.first_point + line.point_count > points ||
+        line.origin_joint < 0 || line.insertion_joint < 0 || std::size_t(line.origin_joint) >= joints ||
+        std::size_t(line.insertion_joint) >= joints)
+      return false;
+  const std::size_t n = skinning.count;
+  if (!skinning.fits(n, skinning.components) || !point.fits(n, points * 3) || !frame.fits(n, points * 6) ||
+      !length.fits(n, points) || !force.fits(n, points))
+    return false;
+  const ColumnView<const float> outputs[4] = {point, frame, length, force};
+  for (int a = 0; a < 4; ++a) {
+    if (outputs[a].overlaps(skinning)) return false;
+    for (int b = a + 1; b < 4; ++b)
+      if (outputs[a].overlaps(outputs[b])) return false;
+  }
+  return true;
+}
+
+bool MuscleJob::run() const {
+  if (!validate()) return false;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, skinning.count, 64),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t w = r.begin(); w < r.end(); ++w) muscle_walker(set, lanes, w);
+                      for (std::size_t w = r.begin(); w < r.end(); ++w) muscle_walker(*this, w);
                     });
+  return true;
+}
+
+bool MuscleJob::run_walker(std::size_t walker) const {
+  if (!validate() || walker >= skinning.count) return false;
+  muscle_walker(*this, walker);
+  return true;
+}
+
+MuscleJob make_muscle_job(const MuscleSet& set, SoaTable& walkers) {
+  return {&set, f32_view(std::as_const(walkers), kWalkerSkinning), f32_view(walkers, kWalkerMusclePoint),
+          f32_view(walkers, kWalkerMuscleFrame), f32_view(walkers, kWalkerMuscleLength),
+          f32_view(walkers, kWalkerMuscleForce)};
 }
 
 }  // namespace strata

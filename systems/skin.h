@@ -5,6 +5,10 @@
 // Each walker goes through the vectorised kernel over the level's SkinLayout (systems/skin_kernel.h), walkers
 // in parallel. Determinism: every walker's output depends only on its own inputs, so any thread count gives
 // the same bytes.
+//
+//   reads:  layout (rest mesh of one level, groups, weights), skinning (joints*12), placement (5),
+//           muscle_force (P, optional), the walker rows to skin (optional)
+//   writes: the SkinnedCrowd's six vertex arrays (prepared beforehand: SkinnedCrowd::prepare)
 #include <cstdint>
 #include <vector>
 
@@ -13,7 +17,9 @@
 #include "components/body.h"
 #include "components/skin_layout.h"
 #include "ecs/aligned_buffer.h"
-#include "components/walker.h"
+#include "ecs/column_view.h"
+#include "systems/job.h"
+#include "systems/skin_kernel.h"
 
 namespace strata {
 
@@ -39,11 +45,35 @@ struct SkinnedCrowd {
   }
   // Axis-aligned bounds of every vertex of every walker; false when empty.
   bool bounds(glm::vec3& lo, glm::vec3& hi) const;
+  // Sizes the crowd for `walkers` blocks of `vertex_count` vertices (stride = pad_to_lanes(vertex_count)) and
+  // records which walker rows they hold (null: block w is walker w). Buffers grow, never shrink: a crowd whose
+  // visible count changes every frame must not reallocate every frame. The jobs only write into what this made.
+  void prepare(std::size_t vertex_count, std::size_t walkers, const std::vector<std::uint32_t>* walker_ids = nullptr);
+  // Block w's six arrays.
+  SkinOutput block(std::size_t w) {
+    const std::size_t o = w * stride;
+    return {px.data() + o, py.data() + o, pz.data() + o, nx.data() + o, ny.data() + o, nz.data() + o, stride};
+  }
 };
 
-// Skins every walker, or only `walkers` when given (rows of the walker table, in the order their blocks are
-// written; out.walker_ids records them).
-void skin_system(const SkinLayout& layout, const WalkerLanes& lanes, SkinnedCrowd& out,
-                 const std::vector<std::uint32_t>* walkers = nullptr);
+struct SkinJob {
+  const SkinLayout* layout = nullptr;
+  ColumnView<const float> skinning;      // S(j) per joint, 3x4 column-major (component j*12 + k)
+  ColumnView<const float> placement;     // position x, y, z, heading, scale (components/walker.h)
+  ColumnView<const float> muscle_force;  // force factor per control point, or empty: no displacement
+  // Rows to skin, in the order their blocks are written (culling, per-walker levels); null: every row.
+  const std::vector<std::uint32_t>* walkers = nullptr;
+  SkinnedCrowd* out = nullptr;           // prepared for this layout and these walkers
+
+  // The columns (skin_columns_valid) and layout fit; every listed row in range; `out` prepared: its vertex
+  // count and stride the layout's, one block per walker skinned, buffers that hold them, walker_ids as listed.
+  bool validate() const;
+  bool run() const;  // walkers in parallel, four per task
+};
+
+// A job over the walker table `walkers` that skins `subset` (null: all) into `out`, which it prepares (the only
+// allocation, and only when the crowd grew).
+SkinJob make_skin_job(const SkinLayout& layout, const SoaTable& walkers, SkinnedCrowd& out,
+                      const std::vector<std::uint32_t>* subset = nullptr);
 
 }  // namespace strata

@@ -1,13 +1,14 @@
 #include "systems/skin_kernel.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <stdexcept>
 
+#include "components/walker.h"
+
 namespace strata {
 namespace {
-
-constexpr std::size_t kMaxJointsPerRig = 512;
 
 // The walker's force factors times its scale, per control point (see MuscleSet::point_count's cap).
 struct MuscleInput {
@@ -142,16 +143,50 @@ bool cpu_has_avx2_fma() {
 
 std::atomic<SkinKernelIsa> g_forced{SkinKernelIsa::Auto};
 
+// placement_of (components/walker.h) over a view; the same expressions, so the same bits.
+Placement placement_at(const ColumnView<const float>& placement, std::size_t walker) {
+  const float heading = placement.at(3, walker);
+  return {{placement.at(0, walker), placement.at(1, walker), placement.at(2, walker)},
+          std::cos(heading), std::sin(heading), placement.at(4, walker)};
+}
+
 }  // namespace
 
-void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t w, const SkinOutput& out) {
-  if (lanes.joints > kMaxJointsPerRig) throw std::invalid_argument("skin_walker: rig has too many joints");
+bool skin_columns_valid(const ColumnView<const float>& skinning, const ColumnView<const float>& placement,
+                        const ColumnView<const float>& muscle_force) {
+  const std::size_t n = skinning.count;
+  if (skinning.components == 0 || skinning.components % kAffineFloats != 0 ||
+      skinning.components / kAffineFloats > kMaxJointsPerRig || !skinning.fits(n, skinning.components) ||
+      !placement.fits(n, 5))
+    return false;
+  if (muscle_force.components == 0) return true;
+  return muscle_force.components >= 2 && muscle_force.components <= kMaxMusclePoints &&
+         muscle_force.fits(n, muscle_force.components);
+}
+
+bool skin_layout_fits(const SkinLayout& layout, std::size_t joints, std::uint32_t muscle_points) {
+  for (const SkinGroup& g : layout.groups) {
+    if (g.influences < 1 || g.influences > kMaxInfluences || g.first + std::size_t(g.count) > layout.vertex_count)
+      return false;
+    for (std::uint32_t k = 0; k < g.influences; ++k)
+      if (g.joints[k] < 0 || std::size_t(g.joints[k]) >= joints) return false;
+  }
+  if (layout.px.size() < layout.vertex_count) return false;
+  return !(layout.muscle_points > 0 && muscle_points > 0 && layout.muscle_points > muscle_points);
+}
+
+namespace detail {
+
+void skin_walker(const SkinLayout& layout, const ColumnView<const float>& skinning,
+                 const ColumnView<const float>& placement, const ColumnView<const float>& muscle_force,
+                 std::size_t w, const SkinOutput& out) {
+  const std::size_t joints = skinning.components / kAffineFloats;
   // The walker's skinning matrices with its placement folded in (world = P * S_j), so the kernel writes world space.
-  const Placement P = placement_of(lanes, w);
+  const Placement P = placement_at(placement, w);
   float world[kMaxJointsPerRig][12];
-  for (std::size_t j = 0; j < lanes.joints; ++j) {
+  for (std::size_t j = 0; j < joints; ++j) {
     float s[12];
-    for (int c = 0; c < 12; ++c) s[c] = lanes.skinning[(j * kAffineFloats + c) * lanes.stride + w];
+    for (int c = 0; c < 12; ++c) s[c] = skinning.base[(j * kAffineFloats + c) * skinning.stride + w];
     for (int col = 0; col < 4; ++col) {
       const glm::vec3 v{s[col * 3], s[col * 3 + 1], s[col * 3 + 2]};
       const glm::vec3 r = col < 3 ? P.direction(P.scale * v) : P.point(v);
@@ -162,17 +197,79 @@ void skin_walker(const SkinLayout& layout, const WalkerLanes& lanes, std::size_t
   }
   // Force factors times the walker's scale: the displacement is in humanoid metres, the output in world metres.
   float force[kMaxMusclePoints];
-  const bool muscles = layout.muscle_points > 0 && lanes.muscle_points > 0;
-  if (muscles) {
-    if (layout.muscle_points > lanes.muscle_points || lanes.muscle_points > kMaxMusclePoints)
-      throw std::invalid_argument("skin_walker: the layout's muscle binding does not fit the walker table");
-    for (std::size_t p = 0; p < lanes.muscle_points; ++p) force[p] = P.scale * lanes.at(lanes.muscle_force, p)[w];
-  }
+  const std::uint32_t points = muscle_force.components;
+  const bool muscles = layout.muscle_points > 0 && points > 0;
+  if (muscles)
+    for (std::uint32_t p = 0; p < points; ++p) force[p] = P.scale * muscle_force.at(p, w);
   const float* f = muscles ? force : nullptr;
   if (skin_kernel_isa() == SkinKernelIsa::Avx2Fma)
     skin_groups_avx2(layout, world, f, out.px, out.py, out.pz, out.nx, out.ny, out.nz);
   else
     skin_groups_portable(layout, world, f, out.px, out.py, out.pz, out.nx, out.ny, out.nz);
+}
+
+void apply_muscle_displacement(const MuscleDisplacementList& list, const ColumnView<const float>& placement,
+                               const ColumnView<const float>& muscle_force, std::size_t w, const SkinOutput& out) {
+  if (list.vertex.empty() || muscle_force.components == 0) return;
+  const float scale = placement_at(placement, w).scale;
+  for (std::size_t i = 0; i < list.vertex.size(); ++i) {
+    float d = 0.0f;
+    for (int k = 0; k < kMusclePointsPerVertex; ++k) d += list.coefficient[i][k] * muscle_force.at(list.point[i][k], w);
+    d *= scale;
+    const std::uint32_t v = list.vertex[i];
+    out.px[v] += d * out.nx[v];
+    out.py[v] += d * out.ny[v];
+    out.pz[v] += d * out.nz[v];
+  }
+}
+
+}  // namespace detail
+
+bool SkinWalkerJob::validate() const {
+  if (!layout || !skin_columns_valid(skinning, placement, muscle_force)) return false;
+  if (!skin_layout_fits(*layout, skinning.components / kAffineFloats, muscle_force.components)) return false;
+  return walker < skinning.count && out.holds(pad_to_lanes(layout->vertex_count));
+}
+
+bool SkinWalkerJob::run() const {
+  if (!validate()) return false;
+  detail::skin_walker(*layout, skinning, placement, muscle_force, walker, out);
+  return true;
+}
+
+bool MuscleDisplacementJob::validate() const {
+  if (!list || list->point.size() != list->vertex.size() || list->coefficient.size() != list->vertex.size())
+    return false;
+  if (!placement.fits(placement.count, 5) || walker >= placement.count) return false;
+  if (list->vertex.empty() || muscle_force.components == 0) return true;  // nothing to move
+  if (!muscle_force.fits(placement.count, muscle_force.components)) return false;
+  std::uint32_t top_vertex = 0;
+  for (std::size_t i = 0; i < list->vertex.size(); ++i) {
+    top_vertex = std::max(top_vertex, list->vertex[i]);
+    for (const std::uint32_t p : list->point[i])
+      if (p >= muscle_force.components) return false;
+  }
+  return out.holds(std::size_t(top_vertex) + 1);
+}
+
+bool MuscleDisplacementJob::run() const {
+  if (!validate()) return false;
+  detail::apply_muscle_displacement(*list, placement, muscle_force, walker, out);
+  return true;
+}
+
+SkinColumns skin_columns(const SoaTable& walkers) {
+  SkinColumns c{f32_view(walkers, kWalkerSkinning), f32_view(walkers, kWalkerPlacement),
+                f32_view(walkers, kWalkerMuscleForce)};
+  // A table made without muscles keeps one placeholder column (components/walker.h): no displacement.
+  if (c.muscle_force.components < 2) c.muscle_force = {};
+  return c;
+}
+
+SkinWalkerJob make_skin_walker_job(const SkinLayout& layout, const SoaTable& walkers, std::size_t walker,
+                                   const SkinOutput& out) {
+  const SkinColumns c = skin_columns(walkers);
+  return {&layout, c.skinning, c.placement, c.muscle_force, walker, out};
 }
 
 MuscleDisplacementList make_muscle_displacement_list(const SkinLayout& layout, const MuscleBinding& binding,
@@ -188,25 +285,6 @@ MuscleDisplacementList make_muscle_displacement_list(const SkinLayout& layout, c
     list.coefficient.push_back(c[b]);
   }
   return list;
-}
-
-void apply_muscle_displacement(const MuscleDisplacementList& list, const WalkerLanes& lanes, std::size_t w,
-                               const SkinOutput& out) {
-  if (list.vertex.empty() || lanes.muscle_points == 0) return;
-  const float scale = placement_of(lanes, w).scale;
-  for (std::size_t i = 0; i < list.vertex.size(); ++i) {
-    float d = 0.0f;
-    for (int k = 0; k < kMusclePointsPerVertex; ++k) {
-      const std::uint32_t p = list.point[i][k];
-      if (p >= lanes.muscle_points) throw std::invalid_argument("apply_muscle_displacement: control point out of range");
-      d += list.coefficient[i][k] * lanes.at(lanes.muscle_force, p)[w];
-    }
-    d *= scale;
-    const std::uint32_t v = list.vertex[i];
-    out.px[v] += d * out.nx[v];
-    out.py[v] += d * out.ny[v];
-    out.pz[v] += d * out.nz[v];
-  }
 }
 
 void force_skin_kernel_isa(SkinKernelIsa isa) {

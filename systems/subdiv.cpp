@@ -6,6 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "components/walker.h"
 #include "ecs/aligned_buffer.h"
 
 namespace strata {
@@ -77,17 +78,46 @@ void ensure(AlignedBuffer<float>& b, std::size_t floats) {
   if (b.size() < floats) b.reset(floats);
 }
 
-}  // namespace
+// Whether the surface, columns and muscle list of a job agree (SubdivWalkerJob and SubdivJob share it).
+bool subdiv_inputs_valid(const SubdivSurface* surface, const ColumnView<const float>& skinning,
+                         const ColumnView<const float>& placement, const ColumnView<const float>& muscle_force,
+                         const MuscleDisplacementList* muscles) {
+  if (!surface || surface->steps.empty() || !skin_columns_valid(skinning, placement, muscle_force)) return false;
+  if (!skin_layout_fits(surface->cage_layout, skinning.components / kAffineFloats, muscle_force.components))
+    return false;
+  // Each step reads the previous level (the cage first) and the last one gives the surface's vertices. The
+  // stencils' own indices are checked once, when make_subdiv_surface builds them (immutable rig data); walking
+  // every term here would cost about as much as applying them.
+  std::size_t source = surface->cage_layout.vertex_count;
+  for (const SubdivStencils& step : surface->steps) {
+    if (step.source_count != source || step.rows() == 0 || step.weights.size() != step.indices.size() ||
+        step.offsets.back() != step.indices.size())
+      return false;
+    source = step.rows();
+  }
+  if (source != surface->vertex_count || surface->triangles.size() % 3 != 0) return false;
+  if (muscles && !muscles->vertex.empty() && muscle_force.components > 0) {
+    if (muscles->point.size() != muscles->vertex.size() || muscles->coefficient.size() != muscles->vertex.size())
+      return false;
+    for (std::size_t i = 0; i < muscles->vertex.size(); ++i) {
+      if (muscles->vertex[i] >= surface->cage_layout.vertex_count) return false;
+      for (const std::uint32_t p : muscles->point[i])
+        if (p >= muscle_force.components) return false;
+    }
+  }
+  return true;
+}
 
-void subdiv_walker(const SubdivSurface& surface, const WalkerLanes& lanes, std::size_t w, const SkinOutput& out,
-                   const MuscleDisplacementList* muscles) {
+// Walker `w` of a validated job.
+void subdiv_walker(const SubdivSurface& surface, const ColumnView<const float>& skinning,
+                   const ColumnView<const float>& placement, const ColumnView<const float>& muscle_force,
+                   const MuscleDisplacementList* muscles, std::size_t w, const SkinOutput& out) {
   thread_local SubdivScratch scratch;
   const std::size_t cage_stride = pad_to_lanes(surface.cage_layout.vertex_count);
   ensure(scratch.cage, 6 * cage_stride);
   const SkinOutput cage = skin_output_in(scratch.cage.data(), cage_stride);
-  skin_walker(surface.cage_layout, lanes, w, cage);
-  if (muscles) apply_muscle_displacement(*muscles, lanes, w, cage);
-
+  detail::skin_walker(surface.cage_layout, skinning, placement, muscle_force, w, cage);
+  if (muscles) detail::apply_muscle_displacement(*muscles, placement, muscle_force, w, cage);
   const float* sx = cage.px;
   const float* sy = cage.py;
   const float* sz = cage.pz;
@@ -106,27 +136,51 @@ void subdiv_walker(const SubdivSurface& surface, const WalkerLanes& lanes, std::
   area_weighted_normals(surface.triangles, surface.vertex_count, out.px, out.py, out.pz, out.nx, out.ny, out.nz);
 }
 
-void subdiv_system(const SubdivSurface& surface, const WalkerLanes& lanes, SkinnedCrowd& out,
-                   const MuscleDisplacementList* muscles) {
-  const std::size_t n = surface.vertex_count;
-  const std::size_t stride = pad_to_lanes(n);
-  if (out.stride * out.walkers != stride * lanes.count || out.px.size() < stride * lanes.count)
-    for (AlignedBuffer<float>* b : {&out.px, &out.py, &out.pz, &out.nx, &out.ny, &out.nz}) b->reset(stride * lanes.count);
-  out.vertex_count = n;
-  out.stride = stride;
-  out.walkers = lanes.count;
+}  // namespace
+
+bool SubdivWalkerJob::validate() const {
+  return subdiv_inputs_valid(surface, skinning, placement, muscle_force, muscles) && walker < skinning.count &&
+         out.holds(pad_to_lanes(surface->vertex_count));
+}
+
+bool SubdivWalkerJob::run() const {
+  if (!validate()) return false;
+  subdiv_walker(*surface, skinning, placement, muscle_force, muscles, walker, out);
+  return true;
+}
+
+bool SubdivJob::validate() const {
+  if (!out || !subdiv_inputs_valid(surface, skinning, placement, muscle_force, muscles)) return false;
+  const std::size_t floats = out->stride * skinning.count;
+  return out->vertex_count == surface->vertex_count && out->stride == pad_to_lanes(surface->vertex_count) &&
+         out->walkers == skinning.count && out->walker_ids.empty() && out->px.size() >= floats &&
+         out->py.size() >= floats && out->pz.size() >= floats && out->nx.size() >= floats &&
+         out->ny.size() >= floats && out->nz.size() >= floats;
+}
+
+bool SubdivJob::run() const {
+  if (!validate()) return false;
   // One walker per task: a walker at level 2 is ~0.5 ms of work, far above the scheduling cost.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lanes.count, 1),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, skinning.count, 1),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t w = r.begin(); w < r.end(); ++w) {
-                        const std::size_t o = w * stride;
-                        subdiv_walker(surface, lanes, w,
-                                      SkinOutput{out.px.data() + o, out.py.data() + o, out.pz.data() + o,
-                                                 out.nx.data() + o, out.ny.data() + o, out.nz.data() + o},
-                                      muscles);
-                      }
+                      for (std::size_t w = r.begin(); w < r.end(); ++w)
+                        subdiv_walker(*surface, skinning, placement, muscle_force, muscles, w, out->block(w));
                     },
                     tbb::simple_partitioner());
+  return true;
+}
+
+SubdivWalkerJob make_subdiv_walker_job(const SubdivSurface& surface, const SoaTable& walkers, std::size_t walker,
+                                       const SkinOutput& out, const MuscleDisplacementList* muscles) {
+  const SkinColumns c = skin_columns(walkers);
+  return {&surface, c.skinning, c.placement, c.muscle_force, muscles, walker, out};
+}
+
+SubdivJob make_subdiv_job(const SubdivSurface& surface, const SoaTable& walkers, SkinnedCrowd& out,
+                          const MuscleDisplacementList* muscles) {
+  out.prepare(surface.vertex_count, walkers.size());
+  const SkinColumns c = skin_columns(walkers);
+  return {&surface, c.skinning, c.placement, c.muscle_force, muscles, &out};
 }
 
 }  // namespace strata

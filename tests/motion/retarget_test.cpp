@@ -1,5 +1,5 @@
 // Retargeting the real CMU walk onto the shipped 25-joint skeleton, checked through the engine's own pipeline
-// (sample_clip -> fk_range), not through the retargeter's internal FK.
+// (sample_clip -> FkJob), not through the retargeter's internal FK.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -61,7 +61,7 @@ PosedClip pose_clip(const Skeleton& skeleton, const AnimationClip& clip, std::si
       for (int c = 0; c < 4; ++c) p.lanes.at(p.lanes.local_rotation, j * 4 + c)[k] = rot[j][c];
     for (int c = 0; c < 3; ++c) p.lanes.at(p.lanes.root_translation, c)[k] = root[c];
   }
-  fk_range(skeleton, p.lanes, 0, frames);
+  EXPECT_TRUE(make_fk_job(skeleton, *p.table).run());
   return p;
 }
 
@@ -275,9 +275,9 @@ TEST_F(RetargetWalk, MocapDriveLocksFeetAcrossLoops) {
   const glm::vec3 start0(lanes.at(lanes.placement, 0)[0], 0.0f, lanes.at(lanes.placement, 2)[0]);
   const int steps = static_cast<int>(3.2f * result_->clip.duration / dt);  // a little over three loops
   for (int step = 0; step < steps; ++step) {
-    mocap_drive_system(rig, lanes, dt);
-    ik_system(skeleton, rig.limbs, lanes);
-    fk_range(skeleton, lanes, 0, lanes.count);
+    ASSERT_TRUE(make_mocap_drive_job(rig, *table, dt).run());
+    ASSERT_TRUE(make_ik_job(skeleton, rig.limbs, *table).run());
+    ASSERT_TRUE(make_fk_job(skeleton, *table).run());
     for (std::size_t w = 0; w < 3; ++w) {
       const glm::vec3 origin(lanes.at(lanes.placement, 0)[w], lanes.at(lanes.placement, 1)[w],
                              lanes.at(lanes.placement, 2)[w]);
@@ -295,8 +295,8 @@ TEST_F(RetargetWalk, MocapDriveLocksFeetAcrossLoops) {
           const float error = glm::length(world - before.world);
           worst = std::max(worst, error);
           EXPECT_LT(error, 1e-3f) << "walker " << w << " leg " << leg << " step " << step << " flags "
-                                  << lanes.at(lanes.ik_result, leg * kIkResultFloats)[w] << " ik error "
-                                  << lanes.at(lanes.ik_result, leg * kIkResultFloats + 1)[w];
+                                  << lanes.ik_flags[leg * lanes.stride + w] << " ik error "
+                                  << lanes.at(lanes.ik_result, leg * kIkResultFloats)[w];
           EXPECT_EQ(now.world, before.world) << "the lock itself never moves";
           ++locked_frames;
         }

@@ -2,13 +2,18 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "io/hanim_loader.h"
 #include "systems/animation_sample.h"
 #include "scene/crowd.h"
 #include "scene/spawn.h"
+#include "scene/body_settings.h"
 #include "scene/step.h"
+#include "systems/mocap_drive.h"
+#include "tests/systems/job_test_util.h"
 
 namespace strata {
 namespace {
@@ -136,6 +141,103 @@ TEST(AnimationSystem, AllClipsLayerEachOnItsOwnCycle) {
   EXPECT_NEAR(angle(1), 0.56f, 1e-4f);
   EXPECT_NEAR(angle(2), 0.4f, 1e-4f);
   EXPECT_NEAR(lanes.root_translation[lanes.stride], -0.035f, 1e-5f);
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing.
+TEST(AnimationJob, JobValidity) {
+  Rig rig;
+  rig.skeleton.joint_names = {"HumanoidRoot", "l_hip", "l_knee"};
+  rig.skeleton.source_joint_names = rig.skeleton.joint_names;
+  rig.skeleton.parents = {-1, 0, 1};
+  rig.skeleton.centers = {{0, 1, 0}, {0.1f, 0.9f, 0}, {0.1f, 0.5f, 0}};
+  rig.skeleton.limits.resize(3);
+  rig.skeleton.stiffness.assign(3, glm::vec3(1.0f));
+  rig.clips.push_back(swing_clip());
+  Crowd scene(rig);
+  for (int w = 0; w < 3; ++w) spawn_clip_walker(scene, {0, 0, 0}, 0.0f, 0.1f * static_cast<float>(w), 1.0f, 0);
+  SoaTable& table = scene.table(initial_slot(scene));
+  const std::size_t written[] = {kWalkerClock, kWalkerLocalRotation, kWalkerRootTranslation};
+  const AnimationJob good = make_animation_job(scene.rig(), table, 0.1f);
+  for (std::size_t f : written) test::fill_sentinel(table, f);
+  auto untouched = [&] {
+    for (std::size_t f : written)
+      if (!test::holds_sentinel(table, f)) return false;
+    return true;
+  };
+  using namespace test;
+  AnimationJob j = good;
+  j.rig = nullptr;
+  expect_refused(j, "no rig", untouched);
+  j = good, j.dt = std::numeric_limits<float>::infinity();
+  expect_refused(j, "dt not finite", untouched);
+  j = good, j.clip = without_base(good.clip);
+  expect_refused(j, "no clip selectors", untouched);
+  j = good, j.rate = with_count(good.rate, 2);
+  expect_refused(j, "rates of fewer walkers", untouched);
+  j = good, j.time = with_components(good.time, 2);
+  expect_refused(j, "time two columns wide", untouched);
+  j = good, j.time = ColumnView<float>{const_cast<float*>(good.rate.base), 1, good.rate.stride, good.rate.count};
+  expect_refused(j, "time written over the rates", untouched);
+  j = good, j.local_rotation = with_components(good.local_rotation, 4 * 2);
+  expect_refused(j, "rotations of another joint count", untouched);
+  j = good, j.root_translation = with_stride(good.root_translation, 2);
+  expect_refused(j, "root stride below the walker count", untouched);
+  j = good, j.root_translation = good.local_rotation.columns(0, 3);
+  expect_refused(j, "root translation over the rotations", untouched);
+
+  EXPECT_TRUE(good.validate());
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(test::holds_sentinel(table, kWalkerLocalRotation));
+}
+
+// The mocap drive job (the animation step of mocap walkers), the same checks.
+TEST(MocapDriveJob, JobValidity) {
+  const Rig rig = to_rig(load_default_humanoid());
+  const AnimationClip clip = swing_clip();
+  const FootContacts contacts;
+  const MocapRig mocap = make_mocap_rig(rig.skeleton, clip, contacts);
+  const auto joints = static_cast<std::uint32_t>(rig.skeleton.joint_count());
+  auto table = make_walker_table("mocap", joints);
+  for (std::uint32_t w = 0; w < 3; ++w) table->add(Entity{w + 1, 1});
+  const std::size_t written[] = {kWalkerClock, kWalkerPlacement, kWalkerFootLock, kWalkerLocalRotation,
+                                 kWalkerRootTranslation, kWalkerIkGoal, kWalkerIkMode};
+  for (std::size_t f : written) test::fill_sentinel(*table, f);
+  auto untouched = [&] {
+    for (std::size_t f : written)
+      if (!test::holds_sentinel(*table, f)) return false;
+    return true;
+  };
+  using namespace test;
+  const MocapDriveJob good = make_mocap_drive_job(mocap, *table, 1.0f / 60.0f);
+  MocapDriveJob j = good;
+  j.rig = nullptr;
+  expect_refused(j, "no rig", untouched);
+  MocapRig no_clip = mocap;
+  no_clip.clip = nullptr;
+  j = good, j.rig = &no_clip;
+  expect_refused(j, "a rig without its clip", untouched);
+  MocapRig legless = mocap;
+  legless.limbs.clear();
+  j = good, j.rig = &legless;
+  expect_refused(j, "a rig without leg limbs", untouched);
+  j = good, j.dt = std::numeric_limits<float>::quiet_NaN();
+  expect_refused(j, "dt not finite", untouched);
+  j = good, j.rate = without_base(good.rate);
+  expect_refused(j, "no rates", untouched);
+  j = good, j.placement = with_components(good.placement, 4);
+  expect_refused(j, "placement without scale", untouched);
+  j = good, j.foot_lock = with_count(good.foot_lock, 2);
+  expect_refused(j, "foot locks of fewer walkers", untouched);
+  j = good, j.local_rotation = with_components(good.local_rotation, 8);
+  expect_refused(j, "rotations of another joint count", untouched);
+  j = good, j.ik_goal = with_stride(good.ik_goal, 2);
+  expect_refused(j, "goal stride below the walker count", untouched);
+  j = good, j.ik_mode = with_components(good.ik_mode, 2);
+  expect_refused(j, "modes for two limbs only", untouched);
+  j = good, j.root_translation = good.placement.columns(0, 3);
+  expect_refused(j, "root translation over the placement", untouched);
+
+  EXPECT_TRUE(good.validate());
 }
 
 }  // namespace

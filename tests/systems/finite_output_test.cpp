@@ -139,15 +139,15 @@ TEST(FiniteOutputs, SkinningOnTenThousandExtremePoses) {
     for (int c = 0; c < 3; ++c) lanes.placement[c * s + w] = where[c];
     lanes.placement[3 * s + w] = x.pick(4) == 0 ? x.uniform(-1e6f, 1e6f) : x.uniform(-3.2f, 3.2f);
     lanes.placement[4 * s + w] = std::pow(10.0f, x.uniform(-6.0f, 6.0f));
-    fk_system(rig.skeleton, lanes);
-    muscle_system(rig.muscles->set, lanes);
+    ASSERT_TRUE(make_fk_job(rig.skeleton, scene.table(initial_slot(scene))).run());
+    ASSERT_TRUE(make_muscle_job(rig.muscles->set, scene.table(initial_slot(scene))).run());
     for (std::size_t p = 0; p < lanes.muscle_points; ++p) {
       ASSERT_TRUE(std::isfinite(lanes.at(lanes.muscle_force, p)[w]) && std::isfinite(lanes.at(lanes.muscle_length, p)[w]))
           << "muscle, trial " << trial << ", control point " << p;
       for (int c = 0; c < 6; ++c) ASSERT_TRUE(std::isfinite(lanes.at(lanes.muscle_frame, p * 6 + c)[w]));
     }
 
-    skin_walker(layout, lanes, w, soa);
+    ASSERT_TRUE(make_skin_walker_job(layout, scene.table(initial_slot(scene)), w, soa).run());
     for (std::size_t i = 0; i < layout.vertex_count; ++i)
       ASSERT_TRUE(std::isfinite(soa.px[i]) && std::isfinite(soa.py[i]) && std::isfinite(soa.pz[i]) &&
                   std::isfinite(soa.nx[i]) && std::isfinite(soa.ny[i]) && std::isfinite(soa.nz[i]))

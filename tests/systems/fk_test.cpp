@@ -16,6 +16,7 @@
 #include "scene/state_hash.h"
 #include "scene/spawn.h"
 #include "scene/step.h"
+#include "tests/systems/job_test_util.h"
 
 namespace strata {
 namespace {
@@ -104,8 +105,8 @@ TEST(Fk, ShoulderRotationMovesOnlyItsDescendantsAsTheReferenceDoes) {
   auto table = make_walker_table("t", static_cast<std::uint32_t>(skeleton.joint_count()));
   table->add(Entity{1, 1});
   write_pose(*table, 0, rotations, glm::vec3(0.0f));
+  ASSERT_TRUE(make_fk_job(skeleton, *table).run());
   WalkerLanes lanes = walker_lanes(*table, static_cast<std::uint32_t>(skeleton.joint_count()));
-  fk_system(skeleton, lanes);
   ReferencePose ref = fk_reference(skeleton, rotations, glm::vec3(0.0f));
 
   const glm::vec3 cs = skeleton.centers[shoulder];
@@ -147,8 +148,8 @@ TEST(Fk, RandomTreesAndPosesMatchRecursiveReference) {
       poses.push_back(pose);
       roots.push_back(root);
     }
+    ASSERT_TRUE(make_fk_job(skeleton, *table).run());
     WalkerLanes lanes = walker_lanes(*table, static_cast<std::uint32_t>(skeleton.joint_count()));
-    fk_system(skeleton, lanes);
     for (std::size_t w = 0; w < walkers; ++w) {
       ReferencePose ref = fk_reference(skeleton, poses[w], roots[w]);
       for (std::size_t j = 0; j < skeleton.joint_count(); ++j) {
@@ -175,8 +176,8 @@ TEST(Fk, UnnormalisedAndZeroQuaternionsGiveRotationsNotNaN) {
   write_pose(*table, 1, scaled, glm::vec3(0.1f));
   table->f32(kWalkerLocalRotation, 2 * 4 + 3)[1] = 0.0f;  // joint 2 of walker 1: zero quaternion
   for (int c = 0; c < 3; ++c) table->f32(kWalkerLocalRotation, 2 * 4 + c)[1] = 0.0f;
+  ASSERT_TRUE(make_fk_job(skeleton, *table).run());
   WalkerLanes lanes = walker_lanes(*table, 6);
-  fk_system(skeleton, lanes);
   for (std::size_t j = 0; j < 6; ++j) {
     glm::mat4 m = lane_matrix(lanes, lanes.skinning, j, 1);
     for (int c = 0; c < 4; ++c)
@@ -207,6 +208,59 @@ TEST(Fk, OutputIsIdenticalForOneAndTwoThreads) {
     hashes[threads - 1] = state_hash(scene);
   }
   EXPECT_EQ(hashes[0], hashes[1]);
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing.
+TEST(FkJob, JobValidity) {
+  std::mt19937_64 rng(5);
+  const Skeleton skeleton = random_skeleton(rng, 6);
+  auto table = make_walker_table("t", 6);
+  for (std::uint32_t w = 0; w < 3; ++w) table->add(Entity{w + 1, 1});
+  for (std::uint32_t w = 0; w < 3; ++w) write_pose(*table, w, std::vector<glm::quat>(6, random_rotation(rng)), {});
+  const FkJob good = make_fk_job(skeleton, *table);
+  auto untouched = [&] {
+    return test::holds_sentinel(*table, kWalkerWorld) && test::holds_sentinel(*table, kWalkerSkinning);
+  };
+  test::fill_sentinel(*table, kWalkerWorld);
+  test::fill_sentinel(*table, kWalkerSkinning);
+  using namespace test;
+  FkJob j = good;
+  j.skeleton = nullptr;
+  expect_refused(j, "no skeleton", untouched);
+  Skeleton cyclic = skeleton;
+  cyclic.parents[2] = 4;  // a parent after its child: the chain would read an unwritten matrix
+  j = good, j.skeleton = &cyclic;
+  expect_refused(j, "parents not first", untouched);
+  Skeleton short_centres = skeleton;
+  short_centres.centers.pop_back();
+  j = good, j.skeleton = &short_centres;
+  expect_refused(j, "a centre missing", untouched);
+  j = good, j.local_rotation = without_base(good.local_rotation);
+  expect_refused(j, "no rotations", untouched);
+  j = good, j.local_rotation = with_components(good.local_rotation, 5 * 4);
+  expect_refused(j, "rotations of another joint count", untouched);
+  j = good, j.root_translation = with_count(good.root_translation, 2);
+  expect_refused(j, "root translation of fewer walkers", untouched);
+  j = good, j.root_translation = with_stride(good.root_translation, 2);
+  expect_refused(j, "stride below the walker count", untouched);
+  j = good, j.world = without_base(good.world);
+  expect_refused(j, "no world output", untouched);
+  j = good, j.skinning = with_components(good.skinning, 6 * 12 - 1);
+  expect_refused(j, "skinning output too narrow", untouched);
+  j = good, j.world = good.skinning;
+  expect_refused(j, "world and skinning outputs alias", untouched);
+  // An input inside an output's memory: world over a scratch block whose upper columns hold the rotations.
+  std::vector<float> block((6 * 12 + 6 * 4) * good.world.stride, 0.0f);
+  j = good, j.world.base = block.data();
+  j.local_rotation.base = block.data() + 6 * 8 * good.world.stride;
+  expect_refused(j, "an output aliasing an input", untouched);
+
+  EXPECT_TRUE(good.validate());
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(test::holds_sentinel(*table, kWalkerWorld));
+  // An empty table is valid and a no-op.
+  auto empty = make_walker_table("e", 6);
+  EXPECT_TRUE(make_fk_job(skeleton, *empty).run());
 }
 
 }  // namespace

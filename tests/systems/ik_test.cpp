@@ -14,6 +14,7 @@
 #include "io/hanim_loader.h"
 #include "systems/fk.h"
 #include "reference/fk_reference.h"
+#include "tests/systems/job_test_util.h"
 #include "systems/ik.h"
 
 namespace strata {
@@ -587,7 +588,8 @@ SystemCase make_system_case(std::size_t walkers, std::uint64_t seed) {
       };
       goal(kGoalPx) = g.x, goal(kGoalPy) = g.y, goal(kGoalPz) = g.z;
       goal(kGoalQx) = o.x, goal(kGoalQy) = o.y, goal(kGoalQz) = o.z, goal(kGoalQw) = o.w;
-      goal(kGoalMode) = static_cast<float>(k < 2 ? IkMode::PositionOrientation : IkMode::Position);
+      c.table->i32(kWalkerIkMode, static_cast<std::uint32_t>(k))[block] =
+          static_cast<std::int32_t>(k < 2 ? IkMode::PositionOrientation : IkMode::Position);
       if (w % 2 == 1) {
         const glm::vec3 pole = glm::mat3(ref.world[s.parents[limb.upper]]) * limb.pole;
         goal(kGoalPoleX) = pole.x, goal(kGoalPoleY) = pole.y, goal(kGoalPoleZ) = pole.z;
@@ -612,8 +614,8 @@ TEST(IkSystem, GoalsReachedThroughPosedParentsAfterFk) {
   const std::vector<LimbChain> limbs = make_limbs(s);
   SystemCase c = make_system_case(37, 9);
   const WalkerLanes lanes = walker_lanes(*c.table, static_cast<std::uint32_t>(s.joint_count()));
-  ik_system(s, limbs, lanes);
-  fk_system(s, lanes);
+  ASSERT_TRUE(make_ik_job(s, limbs, *c.table).run());
+  ASSERT_TRUE(make_fk_job(s, *c.table).run());
   for (std::size_t w = 0; w < lanes.count; ++w) {
     for (std::size_t k = 0; k < limbs.size(); ++k) {
       const glm::vec3 got = lane_position(lanes, limbs[k].lower, w);
@@ -622,9 +624,9 @@ TEST(IkSystem, GoalsReachedThroughPosedParentsAfterFk) {
         EXPECT_LT(rotation_angle_between(lane_orientation(lanes, limbs[k].lower, w), c.targets[w][k]), 1e-4f)
             << "walker " << w << " " << limbs[k].name;
       }
-      const float flags = lanes.ik_result[(k * kIkResultFloats) * lanes.stride + w];
-      const float error = lanes.ik_result[(k * kIkResultFloats + 1) * lanes.stride + w];
-      EXPECT_NE(static_cast<std::uint32_t>(flags) & kIkReached, 0u) << "walker " << w << " " << limbs[k].name;
+      const std::uint32_t flags = lanes.ik_flags[k * lanes.stride + w];
+      const float error = lanes.ik_result[(k * kIkResultFloats) * lanes.stride + w];
+      EXPECT_NE(flags & kIkReached, 0u) << "walker " << w << " " << limbs[k].name;
       EXPECT_LT(error, 1e-5f);
     }
   }
@@ -634,7 +636,7 @@ TEST(IkSystem, OffLimbsAndBrokenGoalsKeepTheirRotations) {
   const Skeleton& s = shipped();
   const std::vector<LimbChain> limbs = make_limbs(s);
   SystemCase c = make_system_case(3, 4);
-  c.table->f32(kWalkerIkGoal, kRightArm * kIkGoalFloats + kGoalMode)[0] = 0.0f;
+  c.table->i32(kWalkerIkMode, kRightArm)[0] = static_cast<std::int32_t>(IkMode::Off);
   c.table->f32(kWalkerIkGoal, kLeftArm * kIkGoalFloats + kGoalPx)[1] = std::numeric_limits<float>::quiet_NaN();
   const WalkerLanes lanes = walker_lanes(*c.table, static_cast<std::uint32_t>(s.joint_count()));
   auto rot = [&](int joint, std::size_t w) {
@@ -643,13 +645,14 @@ TEST(IkSystem, OffLimbsAndBrokenGoalsKeepTheirRotations) {
     return q;
   };
   const glm::vec4 off_before = rot(limbs[kRightArm].upper, 0), broken_before = rot(limbs[kLeftArm].upper, 1);
-  ik_system(s, limbs, lanes);
+  ASSERT_TRUE(make_ik_job(s, limbs, *c.table).run());
   EXPECT_EQ(rot(limbs[kRightArm].upper, 0), off_before);
   EXPECT_EQ(rot(limbs[kLeftArm].upper, 1), broken_before);
+  EXPECT_EQ(lanes.ik_flags[kRightArm * lanes.stride + 0], 0u);
   EXPECT_EQ(lanes.ik_result[(kRightArm * kIkResultFloats) * lanes.stride + 0], 0.0f);
-  EXPECT_EQ(lanes.ik_result[(kLeftArm * kIkResultFloats) * lanes.stride + 1], static_cast<float>(kIkInvalidInput));
-  const float leg_flags = lanes.ik_result[(kLeftLeg * kIkResultFloats) * lanes.stride + 1];
-  EXPECT_NE(static_cast<std::uint32_t>(leg_flags) & kIkReached, 0u) << "the other limbs of that walker still solve";
+  EXPECT_EQ(lanes.ik_flags[kLeftArm * lanes.stride + 1], static_cast<std::uint32_t>(kIkInvalidInput));
+  const std::uint32_t leg_flags = lanes.ik_flags[kLeftLeg * lanes.stride + 1];
+  EXPECT_NE(leg_flags & kIkReached, 0u) << "the other limbs of that walker still solve";
 }
 
 TEST(IkSystem, OutputIdenticalForOneAndTwoThreads) {
@@ -661,11 +664,11 @@ TEST(IkSystem, OutputIdenticalForOneAndTwoThreads) {
     const auto joints = static_cast<std::uint32_t>(s.joint_count());
     {
       tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-      ik_system(s, limbs, walker_lanes(*a.table, joints));
+      ASSERT_TRUE(make_ik_job(s, limbs, *a.table).run());
     }
     {
       tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
-      ik_system(s, limbs, walker_lanes(*b.table, joints));
+      ASSERT_TRUE(make_ik_job(s, limbs, *b.table).run());
     }
     for (std::uint32_t k = 0; k < joints * 4; ++k) {
       const auto x = a.table->f32(kWalkerLocalRotation, k), y = b.table->f32(kWalkerLocalRotation, k);
@@ -675,7 +678,64 @@ TEST(IkSystem, OutputIdenticalForOneAndTwoThreads) {
       const auto x = a.table->f32(kWalkerIkResult, k), y = b.table->f32(kWalkerIkResult, k);
       ASSERT_EQ(std::memcmp(x.data(), y.data(), x.size_bytes()), 0) << "result component " << k;
     }
+    for (std::uint32_t k = 0; k < kIkLimbs; ++k) {
+      const auto x = a.table->u32(kWalkerIkFlags, k), y = b.table->u32(kWalkerIkFlags, k);
+      ASSERT_EQ(std::memcmp(x.data(), y.data(), x.size_bytes()), 0) << "flags of limb " << k;
+    }
   }
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing.
+TEST(IkJob, JobValidity) {
+  const Skeleton& s = shipped();
+  const std::vector<LimbChain> limbs = make_limbs(s);
+  SystemCase c = make_system_case(5, 8);
+  SoaTable& table = *c.table;
+  const IkJob good = make_ik_job(s, limbs, table);
+  test::fill_sentinel(table, kWalkerLocalRotation);
+  test::fill_sentinel(table, kWalkerIkResult);
+  test::fill_sentinel(table, kWalkerIkFlags);
+  auto untouched = [&] {
+    return test::holds_sentinel(table, kWalkerLocalRotation) && test::holds_sentinel(table, kWalkerIkResult) &&
+           test::holds_sentinel(table, kWalkerIkFlags);
+  };
+  using namespace test;
+  IkJob j = good;
+  j.skeleton = nullptr;
+  expect_refused(j, "no skeleton", untouched);
+  j = good, j.limbs = {};
+  expect_refused(j, "no limbs", untouched);
+  std::vector<LimbChain> five = limbs;
+  five.push_back(limbs[0]);
+  j = good, j.limbs = five;
+  expect_refused(j, "more limbs than goal slots", untouched);
+  std::vector<LimbChain> broken = limbs;
+  broken[1].lower = static_cast<std::int32_t>(s.joint_count());
+  j = good, j.limbs = broken;
+  expect_refused(j, "a limb joint outside the skeleton", untouched);
+  broken = limbs;
+  std::swap(broken[2].middle, broken[2].lower);
+  j = good, j.limbs = broken;
+  expect_refused(j, "a limb that is not a chain", untouched);
+  j = good, j.ik_goal = with_components(good.ik_goal, kIkLimbs * kIkGoalFloats + 1);
+  expect_refused(j, "goals of another layout", untouched);
+  j = good, j.ik_mode = without_base(good.ik_mode);
+  expect_refused(j, "no modes", untouched);
+  j = good, j.root_translation = with_count(good.root_translation, 4);
+  expect_refused(j, "root translation of fewer walkers", untouched);
+  j = good, j.local_rotation = with_components(good.local_rotation, 4 * 3);
+  expect_refused(j, "rotations of another joint count", untouched);
+  j = good, j.ik_error = with_stride(good.ik_error, 3);
+  expect_refused(j, "error stride below the walker count", untouched);
+  j = good, j.ik_flags = without_base(good.ik_flags);
+  expect_refused(j, "no flags output", untouched);
+  // An output over an input's memory: the error column written over the goals.
+  j = good, j.ik_error.base = const_cast<float*>(good.ik_goal.base);
+  expect_refused(j, "error output aliasing the goals", untouched);
+
+  EXPECT_TRUE(good.validate());
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(test::holds_sentinel(table, kWalkerIkFlags));
 }
 
 }  // namespace

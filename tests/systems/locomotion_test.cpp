@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -16,6 +17,7 @@
 #include "scene/body_settings.h"
 #include "scene/spawn.h"
 #include "scene/step.h"
+#include "tests/systems/job_test_util.h"
 
 namespace strata {
 namespace {
@@ -62,7 +64,7 @@ TEST(Locomotion, WalkerStaysOnItsPathAndFacesAlongIt) {
     step(scene, 1.0f / 30.0f, profiler);
     WalkerLanes l = scene.lanes();
     for (std::size_t w = 0; w < l.count; ++w) {
-      const CardinalSpline& path = scene.motion.paths[static_cast<std::size_t>(l.gait[kGaitPath * l.stride + w])];
+      const CardinalSpline& path = scene.motion.paths[l.path[w]];
       const float s = l.gait[kGaitDistance * l.stride + w];
       const glm::vec3 on_path = path.point_at_length(s);
       const glm::vec3 placed{l.placement[0 * l.stride + w], 0.0f, l.placement[2 * l.stride + w]};
@@ -145,7 +147,7 @@ TEST(Locomotion, CrowdIsVariedAndLanesKeepTheirSpacing) {
   // Same lane, same speed: a taller walker takes fewer, longer steps.
   for (std::size_t a = 0; a < l.count; ++a)
     for (std::size_t b = 0; b < l.count; ++b) {
-      if (l.gait[kGaitPath * l.stride + a] != l.gait[kGaitPath * l.stride + b]) continue;
+      if (l.path[a] != l.path[b]) continue;
       const float ha = heights[a], hb = heights[b];
       if (ha > hb + 0.02f) {
         const float sa = gait_parameters(ha, cadences[a]).speed, sb = gait_parameters(hb, cadences[b]).speed;
@@ -202,6 +204,75 @@ TEST(Locomotion, RigWithoutLegsCannotWalkAndSaysWhy) {
   CrowdConfig config;
   config.motion = MotionSource::Walk;
   EXPECT_THROW(spawn_crowd(scene, config), std::invalid_argument);
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing: the per-frame job and the
+// one that starts a walker.
+TEST(LocomotionJob, JobValidity) {
+  std::unique_ptr<Crowd> crowd = make_walkers(3);
+  Crowd& scene = *crowd;
+  SoaTable& table = scene.table(initial_slot(scene));
+  const LocomotionRig& rig = *scene.motion.locomotion.get();
+  const std::size_t written[] = {kWalkerGait, kWalkerClock, kWalkerPlacement, kWalkerRootTranslation,
+                                 kWalkerLocalRotation, kWalkerIkGoal, kWalkerIkMode};
+  // Gait state as spawned (the jobs validate it), every other written column the sentinel.
+  for (std::size_t f : written)
+    if (f != kWalkerGait) test::fill_sentinel(table, f);
+  auto untouched = [&] {
+    for (std::size_t f : written)
+      if (f != kWalkerGait && !test::holds_sentinel(table, f)) return false;
+    return true;
+  };
+  using namespace test;
+  const LocomotionJob good = make_locomotion_job(rig, scene.motion.paths, table, 1.0f / 60.0f, scene.motion.style);
+  LocomotionJob j = good;
+  j.rig = nullptr;
+  expect_refused(j, "no rig", untouched);
+  j = good, j.style = nullptr;
+  expect_refused(j, "no style", untouched);
+  j = good, j.paths = {};
+  expect_refused(j, "no paths", untouched);
+  j = good, j.dt = std::numeric_limits<float>::quiet_NaN();
+  expect_refused(j, "dt not finite", untouched);
+  j = good, j.path = without_base(good.path);
+  expect_refused(j, "no path indices", untouched);
+  j = good, j.gait = with_components(good.gait, kGaitFloats - 1);
+  expect_refused(j, "gait state of another layout", untouched);
+  j = good, j.time = with_count(good.time, 2);
+  expect_refused(j, "clock of fewer walkers", untouched);
+  j = good, j.placement = with_stride(good.placement, 1);
+  expect_refused(j, "placement stride below the walker count", untouched);
+  j = good, j.local_rotation = with_components(good.local_rotation, 4 * 3);
+  expect_refused(j, "rotations too few for the rig's joints", untouched);
+  j = good, j.ik_goal = good.gait.columns(0, kIkLimbs * kIkGoalFloats);
+  expect_refused(j, "goals written over the gait state", untouched);
+  j = good, j.ik_mode = with_components(good.ik_mode, 2);
+  expect_refused(j, "modes for two limbs only", untouched);
+  LocomotionRig armless = rig;
+  armless.limbs.resize(2);
+  j = good, j.rig = &armless;
+  expect_refused(j, "a rig without arm limbs", untouched);
+
+  const float height = table.f32(kWalkerGait, kGaitHeight)[1];
+  table.f32(kWalkerGait, kGaitHeight)[1] = 0.0f;
+  expect_refused(good, "a walker of zero height", untouched);
+  table.f32(kWalkerGait, kGaitHeight)[1] = height;
+  table.f32(kWalkerGait, kGaitCadenceTarget)[1] = std::numeric_limits<float>::quiet_NaN();
+  expect_refused(good, "a cadence target that is not a number", untouched);
+  table.f32(kWalkerGait, kGaitCadenceTarget)[1] = 100.0f;
+
+  StartWalkingJob start = make_start_walking_job(rig, scene.motion.paths, table, 2, scene.motion.style);
+  StartWalkingJob s = start;
+  s.walker = 3;
+  expect_refused(s, "walker out of range", untouched);
+  s = start, s.paths = {};
+  expect_refused(s, "no paths", untouched);
+  s = start, s.root_translation = without_base(start.root_translation);
+  expect_refused(s, "no root translation output", untouched);
+
+  EXPECT_TRUE(start.run());
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(untouched());
 }
 
 }  // namespace

@@ -26,6 +26,7 @@
 #include "scene/body_settings.h"
 #include "scene/spawn.h"
 #include "scene/step.h"
+#include "tests/systems/job_test_util.h"
 
 namespace strata {
 namespace {
@@ -236,10 +237,9 @@ struct Posed {
     rotate("l_elbow", elbow_deg);
   }
   const SkinnedCrowd& run() {
-    const WalkerLanes l = scene.lanes();
-    fk_system(scene.rig().skeleton, l);
-    muscle_system(scene.rig().muscles->set, l);
-    skin_system(current_layout(scene), l, out);
+    EXPECT_TRUE(make_fk_job(scene.rig().skeleton, scene.table(initial_slot(scene))).run());
+    EXPECT_TRUE(make_muscle_job(scene.rig().muscles->set, scene.table(initial_slot(scene))).run());
+    EXPECT_TRUE(make_skin_job(current_layout(scene), scene.table(initial_slot(scene)), out).run());
     return out;
   }
   float force(const char* muscle) {
@@ -319,14 +319,14 @@ TEST(MuscleSystem, ZeroLengthSegmentsClampWithoutInfOrNan) {
   const MuscleSet& set = rig.muscles->set;
   const ActionLine& biceps = set.lines[set.find("l_biceps")];
   const WalkerLanes l = scene.lanes();
-  fk_system(rig.skeleton, l);
+  ASSERT_TRUE(make_fk_job(rig.skeleton, scene.table(initial_slot(scene))).run());
   // Walker 0: the insertion joint's matrix moves the insertion exactly onto the origin.
   const glm::vec3 shift = biceps.origin_rest - biceps.insertion_rest;
   for (int c = 0; c < 3; ++c)
     l.at(l.skinning, std::size_t(biceps.insertion_joint) * kAffineFloats + 9 + c)[0] += shift[c];
   // Walker 1: every matrix collapsed to zero.
   for (std::size_t c = 0; c < std::size_t(l.joints) * kAffineFloats; ++c) l.at(l.skinning, c)[1] = 0.0f;
-  muscle_system(set, l);
+  ASSERT_TRUE(make_muscle_job(set, scene.table(initial_slot(scene))).run());
   for (std::size_t w = 0; w < 2; ++w)
     for (std::size_t k = 0; k < l.muscle_points; ++k) {
       ASSERT_TRUE(std::isfinite(l.at(l.muscle_force, k)[w]));
@@ -338,7 +338,7 @@ TEST(MuscleSystem, ZeroLengthSegmentsClampWithoutInfOrNan) {
   EXPECT_FLOAT_EQ(l.at(l.muscle_force, biceps.first_point)[1], 1.0f / set.min_length_ratio - 1.0f);
   set_detail_level(scene, DetailLevel::mesh(2));
   SkinnedCrowd out;
-  skin_system(current_layout(scene), l, out);
+  ASSERT_TRUE(make_skin_job(current_layout(scene), scene.table(initial_slot(scene)), out).run());
   for (std::size_t w = 0; w < 2; ++w)
     for (std::size_t v = 0; v < out.vertex_count; ++v) {
       const glm::vec3 p = out.position(w, v), n = out.normal(w, v);
@@ -370,6 +370,63 @@ TEST(MuscleSystem, EditingOneMuscleChangesOnlyItsVertices) {
     moved += changed;
   }
   EXPECT_GT(moved, 50u);
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing.
+TEST(MuscleJob, JobValidity) {
+  Crowd scene(default_rig());
+  CrowdConfig config;
+  config.walkers = 3;
+  config.motion = MotionSource::Clip;
+  config.clip = kRestPose;
+  spawn_crowd(scene, config);
+  SoaTable& table = scene.table(initial_slot(scene));
+  ASSERT_TRUE(make_fk_job(scene.rig().skeleton, table).run());
+  const MuscleSet& set = scene.rig().muscles->set;
+  const MuscleJob good = make_muscle_job(set, table);
+  const std::size_t outputs[] = {kWalkerMusclePoint, kWalkerMuscleFrame, kWalkerMuscleLength, kWalkerMuscleForce};
+  for (std::size_t f : outputs) test::fill_sentinel(table, f);
+  auto untouched = [&] {
+    for (std::size_t f : outputs)
+      if (!test::holds_sentinel(table, f)) return false;
+    return true;
+  };
+  using namespace test;
+  MuscleJob j = good;
+  j.set = nullptr;
+  expect_refused(j, "no muscle set", untouched);
+  MuscleSet short_rest = set;
+  short_rest.rest_length.pop_back();
+  j = good, j.set = &short_rest;
+  expect_refused(j, "a rest length missing", untouched);
+  MuscleSet far_joint = set;
+  far_joint.lines[0].insertion_joint = static_cast<std::int32_t>(scene.rig().skeleton.joint_count());
+  j = good, j.set = &far_joint;
+  expect_refused(j, "a line on a joint the rig lacks", untouched);
+  MuscleSet past_end = set;
+  past_end.lines.back().first_point = set.point_count - 1;
+  j = good, j.set = &past_end;
+  expect_refused(j, "a line's points past the columns", untouched);
+  j = good, j.skinning = without_base(good.skinning);
+  expect_refused(j, "no skinning matrices", untouched);
+  j = good, j.skinning = with_components(good.skinning, good.skinning.components - 1);
+  expect_refused(j, "skinning not whole matrices", untouched);
+  j = good, j.point = with_components(good.point, good.point.components - 3);
+  expect_refused(j, "point output one point short", untouched);
+  j = good, j.frame = with_count(good.frame, 2);
+  expect_refused(j, "frame output of fewer walkers", untouched);
+  j = good, j.length = with_stride(good.length, 1);
+  expect_refused(j, "length stride below the walker count", untouched);
+  j = good, j.force = without_base(good.force);
+  expect_refused(j, "no force output", untouched);
+  j = good, j.length = good.force;
+  expect_refused(j, "length and force alias", untouched);
+  EXPECT_FALSE(good.run_walker(3)) << "walker out of range";
+  EXPECT_TRUE(untouched());
+
+  EXPECT_TRUE(good.validate());
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(test::holds_sentinel(table, kWalkerMuscleForce));
 }
 
 TEST(MuscleSystem, SameBytesForOneAndTwoThreads) {
@@ -412,15 +469,15 @@ TEST(MuscleSystem, DisplacesTheSubdivisionCageBeforeRefinement) {
   ASSERT_GT(p.scene.rig().muscles->cage->size(), 100u);
   // The cage's displacement list built as the frame script builds it, refined with and without it.
   p.pose(90.0f, 120.0f);
-  const WalkerLanes l = p.scene.lanes();
-  fk_system(p.scene.rig().skeleton, l);
-  muscle_system(p.scene.rig().muscles->set, l);
+  SoaTable& table = p.scene.table(initial_slot(p.scene));
+  ASSERT_TRUE(make_fk_job(p.scene.rig().skeleton, table).run());
+  ASSERT_TRUE(make_muscle_job(p.scene.rig().muscles->set, table).run());
   SkinnedCrowd plain, bulged;
-  subdiv_system(*p.scene.skin.subdiv.get(), l, plain, nullptr);
+  ASSERT_TRUE(make_subdiv_job(*p.scene.skin.subdiv.get(), table, plain, nullptr).run());
   const MuscleRig& m = *p.scene.rig().muscles;
   const MuscleDisplacementList list =
       make_muscle_displacement_list(p.scene.skin.subdiv.get()->cage_layout, *m.cage, muscle_coefficients(m.set, *m.cage));
-  subdiv_system(*p.scene.skin.subdiv.get(), l, bulged, &list);
+  ASSERT_TRUE(make_subdiv_job(*p.scene.skin.subdiv.get(), table, bulged, &list).run());
   float largest = 0.0f;
   for (std::size_t v = 0; v < plain.vertex_count; ++v) {
     const glm::vec3 d = bulged.position(0, v) - plain.position(0, v);
@@ -429,10 +486,10 @@ TEST(MuscleSystem, DisplacesTheSubdivisionCageBeforeRefinement) {
   }
   EXPECT_GT(largest, 0.004f) << "the refined surface bulges over the biceps";
   p.pose(0.0f, 0.0f);
-  fk_system(p.scene.rig().skeleton, l);
-  muscle_system(p.scene.rig().muscles->set, l);
-  subdiv_system(*p.scene.skin.subdiv.get(), l, plain, nullptr);
-  subdiv_system(*p.scene.skin.subdiv.get(), l, bulged, &list);
+  ASSERT_TRUE(make_fk_job(p.scene.rig().skeleton, table).run());
+  ASSERT_TRUE(make_muscle_job(p.scene.rig().muscles->set, table).run());
+  ASSERT_TRUE(make_subdiv_job(*p.scene.skin.subdiv.get(), table, plain, nullptr).run());
+  ASSERT_TRUE(make_subdiv_job(*p.scene.skin.subdiv.get(), table, bulged, &list).run());
   for (std::size_t v = 0; v < plain.vertex_count; ++v) ASSERT_EQ(bulged.position(0, v), plain.position(0, v));
 }
 

@@ -22,6 +22,7 @@
 #include "scene/body_settings.h"
 #include "scene/spawn.h"
 #include "scene/step.h"
+#include "tests/systems/job_test_util.h"
 
 namespace strata {
 namespace {
@@ -93,11 +94,11 @@ TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
           const float xyzw[4] = {q.x, q.y, q.z, q.w};
           for (int c = 0; c < 4; ++c) lanes.local_rotation[(j * 4 + c) * lanes.stride + 1] = xyzw[c];
         }
-        fk_system(rig.skeleton, lanes);
-        muscle_system(rig.muscles->set, lanes);
+        ASSERT_TRUE(make_fk_job(rig.skeleton, scene.table(initial_slot(scene))).run());
+        ASSERT_TRUE(make_muscle_job(rig.muscles->set, scene.table(initial_slot(scene))).run());
       }
       for (std::size_t w = 0; w < lanes.count; ++w) {
-        skin_walker(layout, lanes, w, soa);
+        ASSERT_TRUE(make_skin_walker_job(layout, scene.table(initial_slot(scene)), w, soa).run());
         const std::vector<float> force = walker_muscle_forces(lanes, w);
         const MuscleReference muscles{&rig.muscles->set, &rig.muscles->levels[static_cast<std::size_t>(level)],
                                       scene.skin.gains, force};
@@ -143,6 +144,117 @@ TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
   }
   ASSERT_EQ(result[0].size(), result[1].size());
   EXPECT_TRUE(result[0] == result[1]);
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing: the per-walker kernel job,
+// the crowd job and the cage's muscle displacement.
+TEST(SkinJobs, JobValidity) {
+  Rig rig = to_rig(load_default_humanoid());
+  rig.body = default_bound_body();
+  rig.muscles = default_muscle_rig();
+  Crowd scene(rig);
+  CrowdConfig config;
+  config.walkers = 3;
+  config.motion = MotionSource::Walk;
+  spawn_crowd(scene, config);
+  set_detail_level(scene, DetailLevel::mesh(2));
+  Profiler profiler(8, false);
+  step(scene, 0.1f, profiler);
+  const SkinLayout& layout = current_layout(scene);
+  ASSERT_TRUE(layout.muscle_points > 0);
+  const SoaTable& table = scene.table(initial_slot(scene));
+  using namespace test;
+
+  // SkinWalkerJob: one walker into a plain block.
+  const std::size_t padded = pad_to_lanes(layout.vertex_count);
+  std::vector<float> block(6 * padded, kSentinel);
+  auto block_untouched = [&] {
+    for (float v : block)
+      if (v != kSentinel) return false;
+    return true;
+  };
+  const SkinWalkerJob good = make_skin_walker_job(layout, table, 2, skin_output_in(block.data(), padded));
+  SkinWalkerJob j = good;
+  j.layout = nullptr;
+  expect_refused(j, "no layout", block_untouched);
+  j = good, j.walker = 3;
+  expect_refused(j, "walker out of range", block_untouched);
+  j = good, j.skinning = without_base(good.skinning);
+  expect_refused(j, "no skinning matrices", block_untouched);
+  j = good, j.skinning = with_components(good.skinning, 12 * 3);
+  expect_refused(j, "too few joints for the layout's groups", block_untouched);
+  j = good, j.placement = with_components(good.placement, 4);
+  expect_refused(j, "placement without scale", block_untouched);
+  j = good, j.placement = with_count(good.placement, 2);
+  expect_refused(j, "placement of fewer walkers", block_untouched);
+  j = good, j.muscle_force = with_components(good.muscle_force, layout.muscle_points - 1);
+  expect_refused(j, "fewer force columns than the layout's muscle points", block_untouched);
+  j = good, j.out.capacity = layout.vertex_count - 1;
+  expect_refused(j, "output too short", block_untouched);
+  j = good, j.out.nz = nullptr;
+  expect_refused(j, "an output array missing", block_untouched);
+  SkinLayout bad_group = layout;
+  bad_group.groups[0].joints[0] = 999;
+  j = good, j.layout = &bad_group;
+  expect_refused(j, "a group on a joint the rig lacks", block_untouched);
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(block_untouched());
+
+  // SkinJob: a prepared crowd; a wrongly prepared one is refused.
+  SkinnedCrowd crowd;
+  const std::vector<std::uint32_t> subset = {2, 0};
+  const SkinJob crowd_job = make_skin_job(layout, table, crowd, &subset);
+  auto crowd_untouched = [&] {
+    for (const AlignedBuffer<float>* b : {&crowd.px, &crowd.py, &crowd.pz, &crowd.nx, &crowd.ny, &crowd.nz})
+      for (std::size_t i = 0; i < b->size(); ++i)
+        if ((*b)[i] != kSentinel) return false;
+    return true;
+  };
+  for (AlignedBuffer<float>* b : {&crowd.px, &crowd.py, &crowd.pz, &crowd.nx, &crowd.ny, &crowd.nz})
+    for (std::size_t i = 0; i < b->size(); ++i) (*b)[i] = kSentinel;
+  SkinJob c = crowd_job;
+  c.out = nullptr;
+  expect_refused(c, "no output crowd", crowd_untouched);
+  const std::vector<std::uint32_t> past_end = {2, 3};
+  c = crowd_job, c.walkers = &past_end;
+  expect_refused(c, "a walker row past the table", crowd_untouched);
+  c = crowd_job, c.walkers = nullptr;
+  expect_refused(c, "crowd prepared for a subset, job over everyone", crowd_untouched);
+  c = crowd_job;
+  SkinLayout other = make_skin_layout(rig.body->levels[1]);
+  c.layout = &other;
+  expect_refused(c, "crowd prepared for another level", crowd_untouched);
+  c = crowd_job, c.muscle_force = without_base(crowd_job.muscle_force);
+  expect_refused(c, "no force columns", crowd_untouched);
+  EXPECT_TRUE(crowd_job.run());
+  EXPECT_FALSE(crowd_untouched());
+
+  // MuscleDisplacementJob.
+  MuscleDisplacementList list;
+  list.vertex = {0, 5};
+  list.point = {{0, 1, 2}, {3, 4, 5}};
+  list.coefficient = {{0.1f, 0.2f, 0.3f}, {0.3f, 0.2f, 0.1f}};
+  std::fill(block.begin(), block.end(), kSentinel);
+  const SkinColumns columns = skin_columns(table);
+  const MuscleDisplacementJob move{&list, columns.placement, columns.muscle_force, 1,
+                                   skin_output_in(block.data(), padded)};
+  MuscleDisplacementJob m = move;
+  m.list = nullptr;
+  expect_refused(m, "no list", block_untouched);
+  MuscleDisplacementList ragged = list;
+  ragged.coefficient.pop_back();
+  m = move, m.list = &ragged;
+  expect_refused(m, "arrays of different lengths", block_untouched);
+  MuscleDisplacementList far_point = list;
+  far_point.point[1][2] = columns.muscle_force.components;
+  m = move, m.list = &far_point;
+  expect_refused(m, "a control point past the force columns", block_untouched);
+  m = move, m.out.capacity = 5;
+  expect_refused(m, "a vertex past the output", block_untouched);
+  m = move, m.walker = 3;
+  expect_refused(m, "walker out of range", block_untouched);
+  EXPECT_TRUE(move.run());
+  EXPECT_FALSE(block_untouched());
 }
 
 }  // namespace

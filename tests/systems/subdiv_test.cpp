@@ -35,6 +35,7 @@
 #include "scene/spawn.h"
 #include "render/scene_draw.h"
 #include "scene/step.h"
+#include "tests/systems/job_test_util.h"
 
 namespace strata {
 namespace {
@@ -195,7 +196,7 @@ TEST(Subdiv, NoNanOnExtremePoses) {
       const float xyzw[4] = {q.x, q.y, q.z, q.w};
       for (int c = 0; c < 4; ++c) lanes.local_rotation[(j * 4 + c) * lanes.stride + w] = xyzw[c];
     }
-  fk_system(rig.skeleton, lanes);
+  ASSERT_TRUE(make_fk_job(rig.skeleton, scene.table(initial_slot(scene))).run());
   // Walkers 1-2: arms and legs collapsed (zero skinning matrices); walker 3: placement scale 0 (everything at
   // one point, every triangle degenerate).
   for (const char* name : {"l_elbow", "r_elbow", "l_knee", "r_knee", "l_shoulder"}) {
@@ -206,7 +207,7 @@ TEST(Subdiv, NoNanOnExtremePoses) {
   }
   scene.table(initial_slot(scene)).f32(kWalkerPlacement, 4)[3] = 0.0f;
   SkinnedCrowd out;
-  subdiv_system(*scene.skin.subdiv.get(), lanes, out);
+  ASSERT_TRUE(make_subdiv_job(*scene.skin.subdiv.get(), scene.table(initial_slot(scene)), out).run());
   std::size_t bad = 0, plus_y = 0;
   for (std::size_t w = 0; w < out.walkers; ++w)
     for (std::size_t v = 0; v < out.vertex_count; ++v) {
@@ -271,9 +272,9 @@ TEST(Subdiv, AnyThreadCountGivesTheSameBytes) {
   SkinnedCrowd one, many;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    subdiv_system(*scene.skin.subdiv.get(), scene.lanes(), one);
+    ASSERT_TRUE(make_subdiv_job(*scene.skin.subdiv.get(), scene.table(initial_slot(scene)), one).run());
   }
-  subdiv_system(*scene.skin.subdiv.get(), scene.lanes(), many);
+  ASSERT_TRUE(make_subdiv_job(*scene.skin.subdiv.get(), scene.table(initial_slot(scene)), many).run());
   ASSERT_EQ(one.px.size(), many.px.size());
   EXPECT_EQ(std::memcmp(one.px.data(), many.px.data(), one.px.size() * 4), 0);
   EXPECT_EQ(std::memcmp(one.nz.data(), many.nz.data(), one.nz.size() * 4), 0);
@@ -342,6 +343,66 @@ TEST(Subdiv, OpenBoundaryKeepsItsEdgeAndUvsAreRefinedOnce) {
       ASSERT_NEAR(uv.y, y[v], 1e-5f) << "corner " << t;
     }
   }
+}
+
+// validate() rejects each missing or mismatched input, and run() then writes nothing.
+TEST(SubdivJob, JobValidity) {
+  const Rig rig = default_rig();
+  const auto scene = rest_scene(rig, DetailLevel::subdiv(1));
+  const SubdivSurface& surface = *scene->skin.subdiv.get();
+  const SoaTable& table = scene->table(initial_slot(*scene));
+  using namespace test;
+  const std::size_t stride = pad_to_lanes(surface.vertex_count);
+  std::vector<float> block(6 * stride, kSentinel);
+  auto block_untouched = [&] {
+    for (float v : block)
+      if (v != kSentinel) return false;
+    return true;
+  };
+  const SubdivWalkerJob good = make_subdiv_walker_job(surface, table, 0, skin_output_in(block.data(), stride));
+  SubdivWalkerJob j = good;
+  j.surface = nullptr;
+  expect_refused(j, "no surface", block_untouched);
+  j = good, j.walker = 1;
+  expect_refused(j, "walker out of range", block_untouched);
+  j = good, j.out.capacity = surface.vertex_count - 1;
+  expect_refused(j, "output too short for the refined surface", block_untouched);
+  j = good, j.skinning = with_count(good.skinning, 0);
+  expect_refused(j, "skinning of no walkers", block_untouched);
+  j = good, j.placement = without_base(good.placement);
+  expect_refused(j, "no placement", block_untouched);
+  SubdivSurface broken = surface;
+  broken.steps[0].source_count += 1;
+  j = good, j.surface = &broken;
+  expect_refused(j, "stencils that do not read the cage", block_untouched);
+  broken = surface;
+  broken.vertex_count += 1;
+  j = good, j.surface = &broken;
+  expect_refused(j, "stencils that do not end at the surface's vertices", block_untouched);
+  EXPECT_TRUE(good.run());
+  EXPECT_FALSE(block_untouched());
+
+  SkinnedCrowd crowd;
+  const SubdivJob crowd_job = make_subdiv_job(surface, table, crowd);
+  for (AlignedBuffer<float>* b : {&crowd.px, &crowd.py, &crowd.pz, &crowd.nx, &crowd.ny, &crowd.nz})
+    for (std::size_t i = 0; i < b->size(); ++i) (*b)[i] = kSentinel;
+  auto crowd_untouched = [&] {
+    for (const AlignedBuffer<float>* b : {&crowd.px, &crowd.py, &crowd.pz, &crowd.nx, &crowd.ny, &crowd.nz})
+      for (std::size_t i = 0; i < b->size(); ++i)
+        if ((*b)[i] != kSentinel) return false;
+    return true;
+  };
+  SubdivJob c = crowd_job;
+  c.out = nullptr;
+  expect_refused(c, "no output crowd", crowd_untouched);
+  crowd.walkers = 2;
+  expect_refused(crowd_job, "crowd prepared for another walker count", crowd_untouched);
+  crowd.walkers = 1;
+  crowd.vertex_count -= 1;
+  expect_refused(crowd_job, "crowd prepared for another surface", crowd_untouched);
+  crowd.vertex_count += 1;
+  EXPECT_TRUE(crowd_job.run());
+  EXPECT_FALSE(crowd_untouched());
 }
 
 TEST(Subdiv, RejectsBadInput) {
