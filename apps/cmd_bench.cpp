@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
@@ -95,6 +96,7 @@ int run_bench(const BenchOptions& o) {
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
+    check_scene_inputs(o.scene);
     std::unique_ptr<Crowd> scene = build_scene(o.scene);
     // Warm-up frames settle caches and the thread pool; they are not measured. After the first, a camera framing
     // the crowd (as strata crowd's) is handed to the level-of-detail stage, so the timed frames are the frame every
@@ -155,7 +157,7 @@ int run_bench(const BenchOptions& o) {
                 static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms);
     profiler.print_table(std::cout);
   } catch (const std::exception& e) {
-    std::cerr << "strata bench: " << e.what() << "\n";
+    print_error("bench", error_text(e));
     return 1;
   }
   return 0;
@@ -168,13 +170,13 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("bench", "Time the full simulation (locomotion, IK, FK, skinning) without rendering");
   add_scene_options(*cmd, o->scene);
   cmd->add_option("--frames,-f", o->frames, "Frames to measure")->capture_default_str()
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
-  cmd->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(CLI::PositiveNumber);
+      ->check(whole_in(1, 1'000'000, true));
+  cmd->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(positive_up_to(1000));
   cmd->add_option("--json", o->json, "Write the results here");
   cmd->add_flag("--render", o->render,
                 "Also time the crowd render pass (headless EGL) against raw instanced drawing of the same triangles");
-  cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->callback([o, &exit_code] { exit_code = run_bench(*o); });
 }
 

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
@@ -86,9 +87,10 @@ int run_crowd(const CrowdOptions& o) {
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   std::unique_ptr<Crowd> built;
   try {
+    check_scene_inputs(o.scene);
     built = build_scene(o.scene);
   } catch (const std::exception& e) {
-    std::cerr << "strata crowd: " << e.what() << "\n";
+    print_error("crowd", error_text(e));
     return 1;
   }
   Crowd& scene = *built;
@@ -244,7 +246,7 @@ int run_crowd(const CrowdOptions& o) {
     if (mp4) std::cout << "wrote crowd.mp4 (" << mp4_frames << " frames)\n";
     std::cout << "wrote " << written << " frames, profile.json, profile.csv, summary.json to " << o.out << "\n";
   } catch (const std::exception& e) {
-    std::cerr << "strata crowd: " << e.what() << "\n";
+    print_error("crowd", error_text(e));
     return 1;
   }
   return 0;
@@ -257,25 +259,28 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("crowd", "Simulate a crowd of walkers and render it headless (EGL) with a profile");
   add_scene_options(*cmd, o->scene);
   cmd->add_option("--frames,-f", o->frames, "Frames to simulate and render")->capture_default_str()
-      ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));
+      ->check(whole_in(1, 100'000'000, true));
   cmd->add_option("--out,-o", o->out, "Output directory")->capture_default_str();
-  cmd->add_option("--width", o->width, "Image width")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", o->height, "Image height")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--fps", o->fps, "Simulation frames per second (dt = 1/fps)")->capture_default_str();
+  cmd->add_option("--width", o->width, "Image width")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--height", o->height, "Image height")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--fps", o->fps, "Simulation frames per second (dt = 1/fps)")->capture_default_str()
+      ->check(positive_up_to(1000));
   cmd->add_option("--camera-yaw", o->camera_yaw, "Camera angle about +Y in radians (0 = from the front, +Z)")
-      ->capture_default_str();
-  cmd->add_option("--camera-pitch", o->camera_pitch, "Camera angle above the ground in radians")->capture_default_str();
+      ->capture_default_str()->check(finite_in(-100, 100));
+  // The camera keeps pitch within (-1.5, 1.5) (render/camera.cpp); a value outside is refused rather than clamped.
+  cmd->add_option("--camera-pitch", o->camera_pitch, "Camera angle above the ground in radians (-1.5 to 1.5)")
+      ->capture_default_str()->check(finite_in(-1.5, 1.5));
   cmd->add_flag("--follow", o->follow, "Keep the camera centred on the crowd as it moves");
   cmd->add_flag("--skeleton-overlay", o->skeleton_overlay, "Draw the skeletons too when bodies are drawn");
   cmd->add_option("--png-every", o->png_every, "Write every K-th frame as PNG")->capture_default_str()
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
+      ->check(whole_in(1, 1'000'000, true));
   cmd->add_flag("--no-png", o->no_png, "Render but write no frames");
   cmd->add_flag("!--no-progress", o->progress, "Hide the progress bar");
   cmd->add_flag("--mp4", o->mp4, "Write crowd.mp4 through ffmpeg (the default whenever ffmpeg is on PATH)");
   cmd->add_flag("--no-mp4", o->no_mp4, "Write no video even when ffmpeg is on PATH")->excludes("--mp4");
   cmd->add_option("--table1-frames", o->table1_frames,
                   "Frames timed at each body level not drawn, for the fps column of summary.json's table1 (0: none)")
-      ->capture_default_str()->check(CLI::Range(std::size_t{0}, std::size_t{100'000}));
+      ->capture_default_str()->check(whole_in(0, 100'000, true));
   cmd->callback([o, &exit_code] { exit_code = run_crowd(*o); });
 }
 

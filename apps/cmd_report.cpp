@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
@@ -29,6 +30,7 @@ int run_gait_report(const GaitReportOptions& o) {
   try {
     SceneOptions scene_options = o.scene;
     scene_options.motion = "walk";
+    check_scene_inputs(scene_options);
     std::unique_ptr<Crowd> scene = build_scene(scene_options);
     GaitMetrics metrics(scene->rig().skeleton, *scene->motion.locomotion.get(), scene->motion.style);
     Profiler profiler(120, false);
@@ -86,7 +88,7 @@ int run_gait_report(const GaitReportOptions& o) {
     std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m\n", r.pelvis_bob_cm_mean,
                 r.stride_length_mean_m);
   } catch (const std::exception& e) {
-    std::cerr << "strata report gait: " << e.what() << "\n";
+    print_error("report gait", error_text(e));
     return 1;
   }
   return 0;
@@ -101,8 +103,8 @@ void add_report_command(CLI::App& app, int& exit_code) {
   auto* gait = report->add_subcommand("gait", "Walk a crowd (no rendering) and measure foot slide, IK accuracy, "
                                               "joint limits, NaN and stride length against the gait formula");
   add_scene_options(*gait, o->scene);
-  gait->add_option("--seconds", o->seconds, "Simulated seconds")->capture_default_str()->check(CLI::PositiveNumber);
-  gait->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(CLI::PositiveNumber);
+  gait->add_option("--seconds", o->seconds, "Simulated seconds")->capture_default_str()->check(positive_up_to(86400));
+  gait->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(positive_up_to(1000));
   gait->add_option("--json", o->json, "Write the report here");
   gait->callback([o, &exit_code] { exit_code = run_gait_report(*o); });
   add_skin_report(*report, exit_code);

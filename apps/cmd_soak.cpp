@@ -14,6 +14,7 @@
 #include <iostream>
 #include <thread>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/scene_options.h"
 #include "render/scene_draw.h"
@@ -64,6 +65,7 @@ int run_soak(const SoakOptions& o) {
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
+    check_scene_inputs(o.scene);
     std::unique_ptr<Crowd> scene = build_scene(o.scene);
     std::unique_ptr<GlContext> context;
     std::unique_ptr<SkeletonRenderer> renderer;
@@ -162,7 +164,7 @@ int run_soak(const SoakOptions& o) {
       return 1;
     }
   } catch (const std::exception& e) {
-    std::cerr << "strata soak: " << e.what() << "\n";
+    print_error("soak", error_text(e));
     return 1;
   }
   return 0;
@@ -174,18 +176,19 @@ void add_soak_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<SoakOptions>();
   auto* cmd = app.add_subcommand("soak", "Run a crowd for a wall time, asserting resident memory stays flat");
   add_scene_options(*cmd, o->scene);
-  cmd->add_option("--seconds,-s", o->seconds, "Wall time to run")->capture_default_str()->check(CLI::PositiveNumber);
-  cmd->add_option("--warmup", o->warmup, "Seconds before the baseline sample (default: a quarter, 10-300 s)");
+  cmd->add_option("--seconds,-s", o->seconds, "Wall time to run")->capture_default_str()->check(positive_up_to(1e7));
+  cmd->add_option("--warmup", o->warmup, "Seconds before the baseline sample (default: a quarter, 10-300 s)")
+      ->check(finite_in(0, 1e7));
   cmd->add_option("--fps", o->fps, "Simulation steps per second, also the real-time pace")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_up_to(1000));
   cmd->add_flag("--unpaced", o->unpaced, "Run frames back to back instead of at --fps");
   cmd->add_flag("--render", o->render, "Also render every frame headless (EGL) and read it back");
-  cmd->add_option("--width", o->width, "Render width")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", o->height, "Render height")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--width", o->width, "Render width")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--height", o->height, "Render height")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--tolerance-pct", o->tolerance_pct, "Allowed growth after the warm-up, percent")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
-  cmd->add_option("--sample-every", o->sample_every, "Seconds between memory samples")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(finite_in(0, 1000));
+  cmd->add_option("--sample-every", o->sample_every, "Seconds between memory samples (0.01 to 3600)")->capture_default_str()
+      ->check(finite_in(0.01, 3600));
   cmd->add_option("--json", o->json, "Write the report (with every sample) here");
   cmd->callback([o, &exit_code] { exit_code = run_soak(*o); });
 }

@@ -15,6 +15,7 @@
 #include <span>
 #include <sstream>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/scene_options.h"
 #include "render/scene_draw.h"
@@ -95,6 +96,7 @@ void apply_start_options(const ViewOptions& o, ViewSession& session) {
 // for pictures of the tool (docs/commands.md) and for checking the panel on machines without a display.
 int run_view_headless(const ViewOptions& o) {
   try {
+    check_scene_inputs(o.scene);
     ViewSession session(o.scene);
     apply_start_options(o, session);
     std::unique_ptr<GlContext> context = create_headless_gl_context();
@@ -139,7 +141,7 @@ int run_view_headless(const ViewOptions& o) {
     std::cout << "strata view: " << frames << " frames, " << session.scene().walker_count() << " walkers, saved "
               << o.headless_png << "\n";
   } catch (const std::exception& e) {
-    std::cerr << "strata view: " << e.what() << "\n";
+    print_error("view", error_text(e));
     return 1;
   }
   return 0;
@@ -149,6 +151,7 @@ int run_view(const ViewOptions& o) {
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
+    check_scene_inputs(o.scene);
     ViewSession session(o.scene);
     apply_start_options(o, session);
     ViewPanelState& panel = session.panel();
@@ -274,7 +277,7 @@ int run_view(const ViewOptions& o) {
     std::cout << "strata view: " << frame << " frames, " << session.scene().walker_count() << " walkers\n";
     profiler.print_table(std::cout);
   } catch (const std::exception& e) {
-    std::cerr << "strata view: " << e.what() << "\n";
+    print_error("view", error_text(e));
     return 1;
   }
   return 0;
@@ -286,9 +289,10 @@ void add_view_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ViewOptions>();
   auto* cmd = app.add_subcommand("view", "Open the crowd in a window with an orbit camera (needs a display)");
   add_scene_options(*cmd, o->scene);
-  cmd->add_option("--width", o->width, "Window width")->capture_default_str();
-  cmd->add_option("--height", o->height, "Window height")->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Quit after F frames (0 = run until closed)")->capture_default_str();
+  cmd->add_option("--width", o->width, "Window width")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--height", o->height, "Window height")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--frames", o->frames, "Quit after F frames (0 = run until closed)")->capture_default_str()
+      ->check(whole_in(0, 1e9, true));
   cmd->add_flag("--hidden", o->hidden, "Create the window hidden (smoke tests under Xvfb)");
   cmd->add_flag("--no-panel", o->no_panel, "Hide the control panel (crowd, levels, gait, muscles, timings)");
   cmd->add_flag("--skeleton-overlay", o->skeleton_overlay, "Draw the skeletons too when bodies are drawn");

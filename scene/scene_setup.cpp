@@ -152,6 +152,11 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   return scene;
 }
 
-int thread_count(const SceneOptions& o) { return o.threads > 0 ? o.threads : tbb::info::default_concurrency(); }
+// Capped at the cores TBB will use: global_control only limits parallelism, so asking for 1000 threads on two
+// cores runs two, and summaries must report the two.
+int thread_count(const SceneOptions& o) {
+  const int cores = tbb::info::default_concurrency();
+  return o.threads > 0 ? std::min(o.threads, cores) : cores;
+}
 
 }  // namespace strata
