@@ -110,6 +110,45 @@ std::string check_output_dir(std::string_view flag, const fs::path& path) {
   return {};
 }
 
+bool check_outputs(std::string_view command, std::initializer_list<OutputPath> outputs) {
+  for (const OutputPath& o : outputs) {
+    if (o.path.empty()) continue;
+    const std::string why = o.directory ? check_output_dir(o.flag, o.path) : check_output_file(o.flag, o.path);
+    if (!why.empty()) {
+      print_error(command, why);
+      return false;
+    }
+  }
+  return true;
+}
+
+std::string check_render_size(const GlContext::Limits& limits, int width, int height) {
+  const std::string size = std::to_string(width) + "x" + std::to_string(height);
+  const int side = std::max(width, height);
+  if (limits.max_renderbuffer_size > 0 && side > limits.max_renderbuffer_size)
+    return "--width/--height: " + size + " is above this GL's largest render target (" +
+           std::to_string(limits.max_renderbuffer_size) + " pixels a side)";
+  if ((limits.max_viewport_width > 0 && width > limits.max_viewport_width) ||
+      (limits.max_viewport_height > 0 && height > limits.max_viewport_height))
+    return "--width/--height: " + size + " is above this GL's largest viewport (" +
+           std::to_string(limits.max_viewport_width) + "x" + std::to_string(limits.max_viewport_height) + ")";
+  // Multisampled colour + depth (4 bytes each per sample), the resolved colour, and the RGBA read-back; on a
+  // software renderer (llvmpipe) all of it is system memory.
+  const std::uint64_t samples = static_cast<std::uint64_t>(std::clamp(limits.max_samples, 1, 4));
+  const std::uint64_t pixels = static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
+  const std::string memory = check_memory(pixels * (samples * 8 + 8), "a " + size + " render target");
+  return memory.empty() ? std::string{} : "--width/--height: " + memory;
+}
+
+std::string render_target_error(int width, int height, const GlContext::Limits& limits, const std::exception& e) {
+  const double samples = std::clamp(limits.max_samples, 1, 4);
+  char size[64];
+  std::snprintf(size, sizeof size, "%.1f GiB", double(width) * double(height) * samples * 4.0 / (1024.0 * 1024.0 * 1024.0));
+  return "--width/--height: this GL cannot make a " + std::to_string(width) + "x" + std::to_string(height) +
+         " render target (" + std::to_string(static_cast<int>(samples)) + " samples, " + size +
+         " per attachment); use a smaller size (" + error_text(e) + ")";
+}
+
 std::string error_text(const std::exception& e) {
   std::string text;
   if (dynamic_cast<const std::bad_alloc*>(&e))
@@ -173,8 +212,7 @@ std::string check_memory(std::uint64_t needed, std::string_view what) {
     std::snprintf(text, sizeof text, "%.1f GiB", static_cast<double>(bytes) / (1024.0 * 1024.0 * 1024.0));
     return std::string(text);
   };
-  return std::string(what) + " needs about " + gib(needed) + " of memory, " + gib(available) +
-         " is available; use fewer --walkers or a coarser --level";
+  return std::string(what) + " needs about " + gib(needed) + " of memory, " + gib(available) + " is available";
 }
 
 namespace {

@@ -11,6 +11,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "render/gl_context.h"
+
 namespace strata::cli {
 
 // The exit-code contract (README "Exit codes"). 1 covers bad input files and failures at run time (an unwritable
@@ -53,6 +55,24 @@ std::string check_output_file(std::string_view flag, const std::filesystem::path
 // The same for an output directory: it exists as a writable directory, or the nearest existing ancestor is one
 // (so it can be created).
 std::string check_output_dir(std::string_view flag, const std::filesystem::path& path);
+
+// One output a command will write: the flag that names it, the path (empty: not asked for), a directory or a file.
+struct OutputPath {
+  std::string_view flag;
+  std::filesystem::path path;
+  bool directory = false;
+};
+// Checks every output with check_output_file / check_output_dir; prints the first failure as "strata <command>:
+// ..." and returns false.
+bool check_outputs(std::string_view command, std::initializer_list<OutputPath> outputs);
+
+// ---- Render targets ---------------------------------------------------------------------------------------------
+// Empty when a width x height image fits the live context (renderbuffer and viewport limits) and the memory its
+// multisampled targets and read-back need (with up to 4 samples, as the renderer takes); otherwise the reason,
+// naming --width/--height and the limit.
+std::string check_render_size(const GlContext::Limits& limits, int width, int height);
+// The one-line reason when the renderer could not make a width x height target although the limits allowed it.
+std::string render_target_error(int width, int height, const GlContext::Limits& limits, const std::exception& e);
 
 // ---- Errors ----------------------------------------------------------------------------------------------------
 // The one-line text for an exception that ended a command: std::bad_alloc becomes an out-of-memory message that

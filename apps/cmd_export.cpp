@@ -29,6 +29,7 @@ struct ExportOptions {
 };
 
 int run_export(const ExportOptions& o) {
+  if (!check_outputs("export", {{"--out", o.out}})) return kExitFailure;
   if (o.format != "gltf") {
     std::cerr << "strata export: unknown --format '" << o.format << "' (supported: gltf)\n";
     return 2;

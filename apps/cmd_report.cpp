@@ -25,6 +25,11 @@ struct GaitReportOptions {
 };
 
 int run_gait_report(const GaitReportOptions& o) {
+  if (!check_outputs("report gait", {{"--json", o.json}})) return kExitFailure;
+  if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
+    print_error("report gait", why);
+    return kExitFailure;
+  }
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
@@ -36,7 +41,7 @@ int run_gait_report(const GaitReportOptions& o) {
     Profiler profiler(120, false);
     const float dt = 1.0f / o.fps;
     const auto frames = static_cast<std::size_t>(o.seconds * o.fps + 0.5);
-    for (std::size_t f = 0; f < frames; ++f) {
+    for (std::size_t f = 0; f < frames && !interrupted(); ++f) {
       profiler.begin_frame();
       step(*scene, dt, profiler);
       metrics.observe(scene->lanes(), scene->motion.paths, dt);
@@ -48,6 +53,8 @@ int run_gait_report(const GaitReportOptions& o) {
                stride_ok = r.stride_length_error_pct < 2.0;
     nlohmann::json j;
     j["walkers"] = r.walkers;
+    j["interrupted"] = interrupted();
+    j["inputs"] = scene_inputs_json(o.scene);
     j["seconds"] = r.seconds;
     j["frames"] = r.frames;
     j["fps"] = o.fps;
@@ -87,6 +94,11 @@ int run_gait_report(const GaitReportOptions& o) {
     line("stride_length_error_pct", r.stride_length_error_pct, "< 2", stride_ok);
     std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m\n", r.pelvis_bob_cm_mean,
                 r.stride_length_mean_m);
+    if (interrupted()) {
+      print_error("report gait", "interrupted after " + std::to_string(r.frames) + " of " + std::to_string(frames) +
+                                     " frames; the report covers the frames done");
+      return interrupted_exit_code();
+    }
   } catch (const std::exception& e) {
     print_error("report gait", error_text(e));
     return 1;

@@ -211,6 +211,7 @@ void write_figure(PosedWalker& walker, const std::filesystem::path& dir) {
 }
 
 int run_muscle_report(const MuscleReportOptions& o) {
+  if (!check_outputs("report muscle", {{"--json", o.json}, {"--images", o.images, true}})) return kExitFailure;
   try {
     nlohmann::json out;
     nlohmann::json levels = nlohmann::json::array();

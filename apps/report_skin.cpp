@@ -79,6 +79,7 @@ nlohmann::json quality_json(const Quality& q) {
 }
 
 int run_skin_report(const SkinReportOptions& o) {
+  if (!check_outputs("report skin", {{"--json", o.json}})) return kExitFailure;
   try {
     const Rig rig = to_rig(load_default_humanoid());
     const BodyLevels& levels = default_body();

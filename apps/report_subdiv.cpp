@@ -202,6 +202,7 @@ void flex(const Skeleton& s, const WalkerLanes& lanes) {
 }
 
 int run_subdiv_report(const SubdivReportOptions& o) {
+  if (!check_outputs("report subdiv", {{"--json", o.json}})) return kExitFailure;
   // One core: every number is per core, like the skin benchmarks.
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   try {

@@ -1,9 +1,11 @@
 #include "apps/scene_options.h"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "apps/cli_support.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -35,6 +37,39 @@ void check_scene_inputs(const SceneOptions& o) {
   if (o.muscles != "default" && o.muscles != "none") check("--muscles", o.muscles, false);
   check("--muscle-overrides", o.muscle_overrides, false);
   check("--binding-overrides", o.binding_overrides, false);
+}
+
+std::uint64_t estimate_crowd_bytes(const SceneOptions& o) {
+  // Vertices per walker of the shipped body's levels and of the cage refined S1-S3 (docs/skin.md); under auto
+  // walkers spread over the levels, so the coarsest counts.
+  constexpr std::uint64_t kMeshVertices[] = {17'953, 8'923, 5'133};
+  constexpr std::uint64_t kSubdivVertices[] = {1'800, 7'194, 28'770, 115'074};
+  std::uint64_t vertices = 0;
+  if (o.mesh.empty() && o.skeleton.empty() && !o.level.is_none()) {
+    if (o.level.is_mesh()) vertices = kMeshVertices[std::min(o.level.index(), 2)];
+    else if (o.level.is_subdiv()) vertices = kSubdivVertices[std::min(o.level.index(), 3)];
+    else vertices = kMeshVertices[2];
+  }
+  // Skinned storage: position and normal, 6 floats per vertex. Joint state: world and skinning matrices, local
+  // rotations and the IK and gait columns, about 50 floats for each of the 25 joints.
+  constexpr std::uint64_t kJointBytes = 25 * 50 * sizeof(float);
+  return static_cast<std::uint64_t>(o.walkers) * (vertices * 6 * sizeof(float) + kJointBytes);
+}
+
+std::string check_crowd_memory(const SceneOptions& o) {
+  const std::string why = check_memory(estimate_crowd_bytes(o), std::to_string(o.walkers) + " walkers at --level " +
+                                                                    o.level.name());
+  return why.empty() ? why : why + "; use fewer --walkers or a coarser --level";
+}
+
+nlohmann::json scene_inputs_json(const SceneOptions& o) {
+  auto file = [](const std::string& path) { return path.empty() ? nlohmann::json(nullptr) : nlohmann::json(path); };
+  return {{"skeleton", file(o.skeleton)},
+          {"mesh", file(o.mesh)},
+          {"motion", file(o.motion)},  // null: walk when the skeleton can, else its clips
+          {"muscles", o.muscles},
+          {"muscle_overrides", file(o.muscle_overrides)},
+          {"binding_overrides", file(o.binding_overrides)}};
 }
 
 void add_scene_options(CLI::App& cmd, SceneOptions& o) {

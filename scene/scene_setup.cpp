@@ -140,6 +140,11 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   }
   spawn_crowd(*scene, config);
   set_detail_level(*scene, o.level);
+  if (o.level.is_mesh() && scene->rig().body && static_cast<std::size_t>(o.level.index()) >= scene->rig().body->levels.size())
+    throw std::invalid_argument("--level " + o.level.name() + ": the body has " +
+                                std::to_string(scene->rig().body->levels.size()) +
+                                " level(s); use 0 to " + std::to_string(scene->rig().body->levels.size() - 1) +
+                                ", auto or -1");
   if (o.level.is_subdiv() && scene->skin.level != o.level)
     throw std::invalid_argument("--level " + o.level.name() +
                                 " needs a subdivision cage; only the shipped body has one");
