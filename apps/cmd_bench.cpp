@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
@@ -92,9 +93,15 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o) {
 }
 
 int run_bench(const BenchOptions& o) {
+  if (!check_outputs("bench", {{"--json", o.json}})) return kExitFailure;
+  if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
+    print_error("bench", why);
+    return kExitFailure;
+  }
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
+    check_scene_inputs(o.scene);
     std::unique_ptr<Crowd> scene = build_scene(o.scene);
     // Warm-up frames settle caches and the thread pool; they are not measured. After the first, a camera framing
     // the crowd (as strata crowd's) is handed to the level-of-detail stage, so the timed frames are the frame every
@@ -111,7 +118,8 @@ int run_bench(const BenchOptions& o) {
     for (int f = 1; f < 3; ++f) step(*scene, 1.0f / o.fps, warmup);
     Profiler profiler(o.frames, false);
     const auto start = std::chrono::steady_clock::now();
-    for (std::size_t f = 0; f < o.frames; ++f) {
+    std::size_t frames = 0;  // measured; fewer than --frames when SIGINT/SIGTERM stopped the run
+    for (std::size_t f = 0; f < o.frames && !interrupted(); ++f, ++frames) {
       profiler.begin_frame();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
@@ -120,25 +128,28 @@ int run_bench(const BenchOptions& o) {
       profiler.end_frame();
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double frame_ms = 1000.0 * seconds / static_cast<double>(o.frames);
+    const bool stopped = interrupted();
+    const double frame_ms = frames ? 1000.0 * seconds / static_cast<double>(frames) : 0.0;
     // Vertices per walker of the (finest) level drawn; under --level auto with no camera every walker is at 0.
     const std::vector<BodyDrawInput> draws = body_draw_inputs(*scene);
     const std::size_t vertices = draws.empty() ? 0 : draws.front().vertex_count;
     nlohmann::json j;
     j["walkers"] = scene->walker_count();
-    j["frames"] = o.frames;
+    j["frames"] = frames;
+    j["interrupted"] = stopped;
+    j["inputs"] = scene_inputs_json(o.scene);
     j["threads"] = threads;
     j["level"] = scene->skin.level.json_code();
     j["level_name"] = scene->skin.level.name();
     j["vertices_per_walker"] = vertices;
     j["frame_ms"] = frame_ms;
-    j["walkers_per_second"] = static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms;
+    j["walkers_per_second"] = frame_ms > 0 ? static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms : 0.0;
     nlohmann::json systems = nlohmann::json::array();
     for (const SystemStats& s : profiler.stats())
       systems.push_back({{"name", s.name}, {"mean_ms", s.mean_ms}, {"p95_ms", s.p95_ms}, {"min_ms", s.min_ms},
                          {"max_ms", s.max_ms}});
     j["systems"] = systems;
-    if (o.render) {
+    if (o.render && !stopped) {
       const nlohmann::json r = render_bench(*scene, o);
       j["render"] = r;
       std::printf("render pass (%s, %dx%d): crowd %.3g triangles/s (%.1f ms/frame), raw instanced %.3g triangles/s "
@@ -151,11 +162,15 @@ int run_bench(const BenchOptions& o) {
     if (!o.json.empty()) write_json_file(o.json, j);
     std::printf("strata bench: %zu walkers x %zu frames, level %s (%zu vertices each), %d threads: %.2f ms/frame, "
                 "%.0f walker-frames/s\n",
-                scene->walker_count(), o.frames, scene->skin.level.name().c_str(), vertices, threads, frame_ms,
-                static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms);
+                scene->walker_count(), frames, scene->skin.level.name().c_str(), vertices, threads, frame_ms,
+                frame_ms > 0 ? static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms : 0.0);
     profiler.print_table(std::cout);
+    if (stopped) {
+      print_error("bench", "interrupted after " + std::to_string(frames) + " of " + std::to_string(o.frames) + " frames");
+      return interrupted_exit_code();
+    }
   } catch (const std::exception& e) {
-    std::cerr << "strata bench: " << e.what() << "\n";
+    print_error("bench", error_text(e));
     return 1;
   }
   return 0;
@@ -168,13 +183,13 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("bench", "Time the full simulation (locomotion, IK, FK, skinning) without rendering");
   add_scene_options(*cmd, o->scene);
   cmd->add_option("--frames,-f", o->frames, "Frames to measure")->capture_default_str()
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
-  cmd->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(CLI::PositiveNumber);
+      ->check(whole_in(1, 1'000'000, true));
+  cmd->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(positive_up_to(1000));
   cmd->add_option("--json", o->json, "Write the results here");
   cmd->add_flag("--render", o->render,
                 "Also time the crowd render pass (headless EGL) against raw instanced drawing of the same triangles");
-  cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->callback([o, &exit_code] { exit_code = run_bench(*o); });
 }
 

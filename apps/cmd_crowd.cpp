@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
@@ -57,51 +58,72 @@ struct CrowdOptions {
   std::size_t table1_frames = 5;   // frames timed at each body level not drawn, for summary.json's table1
 };
 
-// One line that rewrites itself; only when stderr is a terminal, so logs and CI output stay clean.
-class ProgressBar {
- public:
-  ProgressBar(std::size_t total, bool enabled) : total_(total), enabled_(enabled && isatty(fileno(stderr))) {}
-  void update(std::size_t done, double fps) {
-    if (!enabled_) return;
-    constexpr int kWidth = 30;
-    int filled = total_ ? static_cast<int>(kWidth * done / total_) : kWidth;
-    std::fprintf(stderr, "\r[%.*s%*s] %zu/%zu frames  %.1f fps ", filled, "##############################",
-                 kWidth - filled, "", done, total_, fps);
-    if (done == total_) std::fputc('\n', stderr);
-    std::fflush(stderr);
-  }
-
- private:
-  std::size_t total_;
-  bool enabled_;
-};
+// summary.json: written at the start (the directory's manifest while the run goes on, "running": true, so a
+// killed run's directory is still recognised as a crowd output) and at the end with the files written.
+void write_summary(const std::filesystem::path& dir, nlohmann::json summary, const std::vector<std::string>& files) {
+  nlohmann::json list = files;
+  list.push_back("summary.json");
+  summary["files"] = list;
+  write_json_file(dir / "summary.json", summary);
+}
 
 int run_crowd(const CrowdOptions& o) {
   namespace fs = std::filesystem;
-  if (o.frames == 0 || o.width <= 0 || o.height <= 0 || !(o.fps > 0.0f)) {
-    std::cerr << "strata crowd: --frames, --width, --height and --fps must be positive\n";
-    return 2;
+  const fs::path out(o.out);
+  // Everything that can be refused is refused before any work: the output directory, the memory the crowd
+  // needs, the inputs, then (once a context exists) the image size.
+  if (!check_outputs("crowd", {{"--out", out, true}})) return kExitFailure;
+  if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
+    print_error("crowd", why);
+    return kExitFailure;
   }
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   std::unique_ptr<Crowd> built;
+  std::unique_ptr<GlContext> context;
   try {
+    check_scene_inputs(o.scene);
     built = build_scene(o.scene);
+    context = create_headless_gl_context();
   } catch (const std::exception& e) {
-    std::cerr << "strata crowd: " << e.what() << "\n";
-    return 1;
+    print_error("crowd", error_text(e));
+    return kExitFailure;
+  }
+  if (const std::string why = check_render_size(context->limits(), o.width, o.height); !why.empty()) {
+    print_error("crowd", why);
+    return kExitFailure;
+  }
+  // The render targets are made now, before the output directory: a driver may refuse a size inside the limits
+  // it reports (llvmpipe caps one resource's bytes, which 4x MSAA at 12000x12000 exceeds), and that must fail
+  // here with the flags named, not at the first frame with a bare GL status.
+  std::unique_ptr<CrowdRenderer> renderer_owner;
+  try {
+    renderer_owner = std::make_unique<CrowdRenderer>(o.width, o.height);
+  } catch (const std::exception& e) {
+    print_error("crowd", render_target_error(o.width, o.height, context->limits(), e));
+    return kExitFailure;
+  }
+  CrowdRenderer& renderer = *renderer_owner;
+  const OutputClaim claim = claim_crowd_output_dir(out);
+  if (!claim.refused.empty()) {
+    print_error("crowd", claim.refused);
+    return kExitUsage;
   }
   Crowd& scene = *built;
   std::error_code ec;
-  fs::create_directories(o.out, ec);
+  fs::create_directories(out, ec);
   if (ec) {
-    std::cerr << "strata crowd: cannot create output directory " << o.out << ": " << ec.message() << "\n";
-    return 1;
+    print_error("crowd", "--out: cannot create " + out.string() + ": " + ec.message());
+    return kExitFailure;
   }
 
+  nlohmann::json summary;
+  summary["command"] = "crowd";
+  summary["running"] = true;
+  summary["inputs"] = scene_inputs_json(o.scene);
+  std::vector<std::string> files;  // written so far, relative to --out
   try {
-    auto context = create_headless_gl_context();
-    CrowdRenderer renderer(o.width, o.height);
+    write_summary(out, summary, files);
     const bool bodies = !scene.skin.level.is_none();
     RenderScratch scratch;
     RenderFrameOptions draw;
@@ -112,7 +134,7 @@ int run_crowd(const CrowdOptions& o) {
     camera.pitch = o.camera_pitch;
     std::vector<glm::vec3> joints;
     std::vector<std::uint8_t> pixels;
-    ProgressBar bar(o.frames, o.progress);
+    ProgressLine bar("frames", o.progress);
     const float dt = 1.0f / o.fps;
     const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
     std::size_t written = 0;
@@ -122,12 +144,15 @@ int run_crowd(const CrowdOptions& o) {
       if (ffmpeg.empty())
         std::cerr << "strata crowd: ffmpeg is not on PATH; no crowd.mp4 (install ffmpeg for a video)\n";
       else
-        mp4 = std::make_unique<Mp4Writer>(ffmpeg, fs::path(o.out) / "crowd.mp4", o.width, o.height, o.fps);
+        mp4 = std::make_unique<Mp4Writer>(ffmpeg, out / "crowd.mp4", o.width, o.height, o.fps);
     }
     double simulate_render_s = 0.0;  // simulate + render + read-back, without writing outputs: Table 1's fps
     const auto wall_start = std::chrono::steady_clock::now();
 
+    std::size_t frames_done = 0;
     for (std::size_t f = 0; f < o.frames; ++f) {
+      // SIGINT/SIGTERM: stop between frames, then write what the frames done show.
+      if (interrupted()) break;
       profiler.begin_frame();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
@@ -159,24 +184,40 @@ int run_crowd(const CrowdOptions& o) {
           STRATA_PROFILE_SCOPE(profiler, "write_png");
           char name[32];
           std::snprintf(name, sizeof name, "frame_%04zu.png", f);
-          write_image(fs::path(o.out) / name, o.width, o.height, 4, pixels);
+          write_image(out / name, o.width, o.height, 4, pixels);
+          files.push_back(name);
           ++written;
         }
       }
       profiler.end_frame();
+      frames_done = f + 1;
       double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-      bar.update(f + 1, elapsed > 0 ? static_cast<double>(f + 1) / elapsed : 0.0);
+      bar.update(static_cast<double>(f + 1), static_cast<double>(o.frames),
+                 elapsed > 0 ? static_cast<double>(f + 1) / elapsed : 0.0);
     }
+    bar.finish();
+    const bool stopped = interrupted();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    const std::size_t mp4_frames = mp4 ? mp4->finish() : 0;
+    std::size_t mp4_frames = 0;
+    if (mp4) {
+      // No frame: an empty video is no video.
+      if (frames_done > 0) {
+        mp4_frames = mp4->finish();
+        files.push_back("crowd.mp4");
+      }
+      else mp4.reset();
+    }
 
-    profiler.write_chrome_trace(fs::path(o.out) / "profile.json");
-    profiler.write_csv(fs::path(o.out) / "profile.csv");
+    profiler.write_chrome_trace(out / "profile.json");
+    files.push_back("profile.json");
+    profiler.write_csv(out / "profile.csv");
+    files.push_back("profile.csv");
 
-    nlohmann::json summary;
-    summary["command"] = "crowd";
+    summary.erase("running");
+    summary["interrupted"] = stopped;
     summary["walkers"] = scene.walker_count();
-    summary["frames"] = o.frames;
+    summary["frames"] = frames_done;
+    summary["frames_requested"] = o.frames;
     summary["frames_written"] = written;
     summary["width"] = o.width;
     summary["height"] = o.height;
@@ -203,7 +244,7 @@ int run_crowd(const CrowdOptions& o) {
     summary["gl_renderer"] = context->renderer();
     summary["gl_version"] = context->version();
     summary["wall_s"] = wall;
-    summary["fps"] = static_cast<double>(o.frames) / wall;
+    summary["fps"] = wall > 0 ? static_cast<double>(frames_done) / wall : 0.0;
     summary["state_hash"] = state_hash(scene);
     nlohmann::json systems = nlohmann::json::array();
     for (const SystemStats& s : profiler.stats())
@@ -212,19 +253,21 @@ int run_crowd(const CrowdOptions& o) {
     summary["systems"] = systems;
     summary["mp4"] = mp4 ? nlohmann::json("crowd.mp4") : nlohmann::json(nullptr);
     // The paper's Table 1, one row per body level. Measured after everything above (state_hash included), since
-    // timing the other levels walks the crowd on.
+    // timing the other levels walks the crowd on. Not after an interruption: the user asked to stop.
     // A profiler of its own, so the extra frames stay out of the timings reported above.
     Profiler table1_profiler(1, false);
-    const std::vector<Table1Row> table1 = measure_table1(
-        scene, static_cast<double>(o.frames) / simulate_render_s, o.frames, o.table1_frames, [&] {
-          step(scene, dt, table1_profiler);
-          render_frame(scene, renderer, camera, aspect, o.height, scratch, draw);
-          renderer.read_rgba(pixels);
-        });
+    const std::vector<Table1Row> table1 =
+        frames_done == 0 ? std::vector<Table1Row>{}
+                         : measure_table1(scene, static_cast<double>(frames_done) / simulate_render_s, frames_done,
+                                          stopped ? 0 : o.table1_frames, [&] {
+                                            step(scene, dt, table1_profiler);
+                                            render_frame(scene, renderer, camera, aspect, o.height, scratch, draw);
+                                            renderer.read_rgba(pixels);
+                                          });
     summary["table1"] = table1_json(table1);
-    write_json_file(fs::path(o.out) / "summary.json", summary);
+    write_summary(out, summary, files);
 
-    std::cout << "strata crowd: " << scene.walker_count() << " walkers x " << o.frames << " frames, "
+    std::cout << "strata crowd: " << scene.walker_count() << " walkers x " << frames_done << " frames, "
               << scene.rig().skeleton.joint_count() << " joints each, " << o.width << "x" << o.height << " on "
               << context->renderer() << ", " << threads << " threads, " << wall << " s wall\n";
     profiler.print_table(std::cout);
@@ -243,11 +286,16 @@ int run_crowd(const CrowdOptions& o) {
     }
     if (mp4) std::cout << "wrote crowd.mp4 (" << mp4_frames << " frames)\n";
     std::cout << "wrote " << written << " frames, profile.json, profile.csv, summary.json to " << o.out << "\n";
+    if (stopped) {
+      print_error("crowd", "interrupted after " + std::to_string(frames_done) + " of " + std::to_string(o.frames) +
+                               " frames; the outputs cover the frames done");
+      return interrupted_exit_code();
+    }
   } catch (const std::exception& e) {
-    std::cerr << "strata crowd: " << e.what() << "\n";
-    return 1;
+    print_error("crowd", error_text(e));
+    return kExitFailure;
   }
-  return 0;
+  return kExitOk;
 }
 
 }  // namespace
@@ -257,25 +305,28 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("crowd", "Simulate a crowd of walkers and render it headless (EGL) with a profile");
   add_scene_options(*cmd, o->scene);
   cmd->add_option("--frames,-f", o->frames, "Frames to simulate and render")->capture_default_str()
-      ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}));
+      ->check(whole_in(1, 100'000'000, true));
   cmd->add_option("--out,-o", o->out, "Output directory")->capture_default_str();
-  cmd->add_option("--width", o->width, "Image width")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", o->height, "Image height")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--fps", o->fps, "Simulation frames per second (dt = 1/fps)")->capture_default_str();
+  cmd->add_option("--width", o->width, "Image width")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--height", o->height, "Image height")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--fps", o->fps, "Simulation frames per second (dt = 1/fps)")->capture_default_str()
+      ->check(positive_up_to(1000));
   cmd->add_option("--camera-yaw", o->camera_yaw, "Camera angle about +Y in radians (0 = from the front, +Z)")
-      ->capture_default_str();
-  cmd->add_option("--camera-pitch", o->camera_pitch, "Camera angle above the ground in radians")->capture_default_str();
+      ->capture_default_str()->check(finite_in(-100, 100));
+  // The camera keeps pitch within (-1.5, 1.5) (render/camera.cpp); a value outside is refused rather than clamped.
+  cmd->add_option("--camera-pitch", o->camera_pitch, "Camera angle above the ground in radians (-1.5 to 1.5)")
+      ->capture_default_str()->check(finite_in(-1.5, 1.5));
   cmd->add_flag("--follow", o->follow, "Keep the camera centred on the crowd as it moves");
   cmd->add_flag("--skeleton-overlay", o->skeleton_overlay, "Draw the skeletons too when bodies are drawn");
   cmd->add_option("--png-every", o->png_every, "Write every K-th frame as PNG")->capture_default_str()
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
+      ->check(whole_in(1, 1'000'000, true));
   cmd->add_flag("--no-png", o->no_png, "Render but write no frames");
   cmd->add_flag("!--no-progress", o->progress, "Hide the progress bar");
   cmd->add_flag("--mp4", o->mp4, "Write crowd.mp4 through ffmpeg (the default whenever ffmpeg is on PATH)");
   cmd->add_flag("--no-mp4", o->no_mp4, "Write no video even when ffmpeg is on PATH")->excludes("--mp4");
   cmd->add_option("--table1-frames", o->table1_frames,
                   "Frames timed at each body level not drawn, for the fps column of summary.json's table1 (0: none)")
-      ->capture_default_str()->check(CLI::Range(std::size_t{0}, std::size_t{100'000}));
+      ->capture_default_str()->check(whole_in(0, 100'000, true));
   cmd->callback([o, &exit_code] { exit_code = run_crowd(*o); });
 }
 

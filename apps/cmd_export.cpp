@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "io/gltf_export.h"
 #include "io/hanim_loader.h"
@@ -28,6 +29,7 @@ struct ExportOptions {
 };
 
 int run_export(const ExportOptions& o) {
+  if (!check_outputs("export", {{"--out", o.out}})) return kExitFailure;
   if (o.format != "gltf") {
     std::cerr << "strata export: unknown --format '" << o.format << "' (supported: gltf)\n";
     return 2;
@@ -56,7 +58,7 @@ int run_export(const ExportOptions& o) {
     if (!o.rest) std::cout << ", walk " << walk.clip.duration << " s in " << stats.keys << " keys";
     std::cout << ", " << wall << " s\n";
   } catch (const std::exception& e) {
-    std::cerr << "strata export: " << e.what() << "\n";
+    print_error("export", error_text(e));
     return 1;
   }
   return 0;
@@ -70,12 +72,13 @@ void add_export_command(CLI::App& app, int& exit_code) {
                                            "weights, a baked walk) as glTF 2.0 binary");
   cmd->add_option("--format", o->format, "Output format (gltf: glTF 2.0 binary, .glb)")->capture_default_str();
   cmd->add_option("--level", o->level, "Body resolution level: 0 (finest) .. 2")->capture_default_str()
-      ->check(CLI::Range(0, 2));
+      ->check(whole_in(0, 2));
   cmd->add_option("--seconds", o->seconds, "Length of the baked walk")->capture_default_str()
-      ->check(CLI::Range(0.001f, 3600.0f));
+      ->check(finite_in(0.001, 3600));
   cmd->add_option("--fps", o->fps, "Animation keys per second (the walk generator's dt = 1/fps)")
-      ->capture_default_str()->check(CLI::Range(1.0f, 1000.0f));
-  cmd->add_option("--seed", o->seed, "Seed of the walker's gait phase and speed")->capture_default_str();
+      ->capture_default_str()->check(finite_in(1, 1000));
+  cmd->add_option("--seed", o->seed, "Seed of the walker's gait phase and speed")->capture_default_str()
+      ->check(whole_in(0, 9007199254740992.0, true));
   cmd->add_flag("--rest", o->rest, "Write the rest pose only, no animation");
   cmd->add_option("--out,-o", o->out, "Output file (.glb)")->required();
   cmd->callback([o, &exit_code] { exit_code = run_export(*o); });

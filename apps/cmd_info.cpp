@@ -7,7 +7,9 @@
 
 #include <filesystem>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
+#include "apps/scene_options.h"
 #include "scene/input_formats.h"
 #include "scene/scene_setup.h"
 #include "io/bvh.h"
@@ -42,7 +44,7 @@ int run_other_info(const std::string& path, InputFormatId format) {
                   << c.translations.size() << " translation channels\n";
     }
   } catch (const std::exception& e) {
-    std::cerr << "strata info: " << e.what() << "\n";
+    print_error("info", error_text(e));
     return 1;
   }
   return 0;
@@ -56,7 +58,7 @@ int run_info(const std::string& path) {
     if (format != InputFormatId::HAnim) return run_other_info(path, format);
     asset = load_humanoid_file(path);
   } catch (const std::exception& e) {
-    std::cerr << "strata info: " << e.what() << "\n";
+    print_error("info", error_text(e));
     return 1;
   }
   const Skeleton& s = asset.skeleton;
@@ -94,6 +96,7 @@ void add_info_command(CLI::App& app, int& exit_code) {
                                          "MakeHuman folder) and print a summary");
   auto path = std::make_shared<std::string>();
   cmd->add_option("FILE", *path, "Input file")->required();
+  add_input_limit_option(*cmd);
   cmd->callback([path, &exit_code] { exit_code = run_info(*path); });
 }
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
@@ -24,17 +25,23 @@ struct GaitReportOptions {
 };
 
 int run_gait_report(const GaitReportOptions& o) {
+  if (!check_outputs("report gait", {{"--json", o.json}})) return kExitFailure;
+  if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
+    print_error("report gait", why);
+    return kExitFailure;
+  }
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
     SceneOptions scene_options = o.scene;
     scene_options.motion = "walk";
+    check_scene_inputs(scene_options);
     std::unique_ptr<Crowd> scene = build_scene(scene_options);
     GaitMetrics metrics(scene->rig().skeleton, *scene->motion.locomotion.get(), scene->motion.style);
     Profiler profiler(120, false);
     const float dt = 1.0f / o.fps;
     const auto frames = static_cast<std::size_t>(o.seconds * o.fps + 0.5);
-    for (std::size_t f = 0; f < frames; ++f) {
+    for (std::size_t f = 0; f < frames && !interrupted(); ++f) {
       profiler.begin_frame();
       step(*scene, dt, profiler);
       metrics.observe(scene->lanes(), scene->motion.paths, dt);
@@ -46,6 +53,8 @@ int run_gait_report(const GaitReportOptions& o) {
                stride_ok = r.stride_length_error_pct < 2.0;
     nlohmann::json j;
     j["walkers"] = r.walkers;
+    j["interrupted"] = interrupted();
+    j["inputs"] = scene_inputs_json(o.scene);
     j["seconds"] = r.seconds;
     j["frames"] = r.frames;
     j["fps"] = o.fps;
@@ -85,8 +94,13 @@ int run_gait_report(const GaitReportOptions& o) {
     line("stride_length_error_pct", r.stride_length_error_pct, "< 2", stride_ok);
     std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m\n", r.pelvis_bob_cm_mean,
                 r.stride_length_mean_m);
+    if (interrupted()) {
+      print_error("report gait", "interrupted after " + std::to_string(r.frames) + " of " + std::to_string(frames) +
+                                     " frames; the report covers the frames done");
+      return interrupted_exit_code();
+    }
   } catch (const std::exception& e) {
-    std::cerr << "strata report gait: " << e.what() << "\n";
+    print_error("report gait", error_text(e));
     return 1;
   }
   return 0;
@@ -101,8 +115,8 @@ void add_report_command(CLI::App& app, int& exit_code) {
   auto* gait = report->add_subcommand("gait", "Walk a crowd (no rendering) and measure foot slide, IK accuracy, "
                                               "joint limits, NaN and stride length against the gait formula");
   add_scene_options(*gait, o->scene);
-  gait->add_option("--seconds", o->seconds, "Simulated seconds")->capture_default_str()->check(CLI::PositiveNumber);
-  gait->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(CLI::PositiveNumber);
+  gait->add_option("--seconds", o->seconds, "Simulated seconds")->capture_default_str()->check(positive_up_to(86400));
+  gait->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(positive_up_to(1000));
   gait->add_option("--json", o->json, "Write the report here");
   gait->callback([o, &exit_code] { exit_code = run_gait_report(*o); });
   add_skin_report(*report, exit_code);

@@ -15,6 +15,7 @@
 #include <span>
 #include <sstream>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/scene_options.h"
 #include "render/scene_draw.h"
@@ -94,7 +95,9 @@ void apply_start_options(const ViewOptions& o, ViewSession& session) {
 // The viewer without a window: the same session, scene and panel drawn through EGL into the renderer's output,
 // for pictures of the tool (docs/commands.md) and for checking the panel on machines without a display.
 int run_view_headless(const ViewOptions& o) {
+  if (!check_outputs("view", {{"--headless-png", o.headless_png}})) return kExitFailure;
   try {
+    check_scene_inputs(o.scene);
     ViewSession session(o.scene);
     apply_start_options(o, session);
     std::unique_ptr<GlContext> context = create_headless_gl_context();
@@ -139,16 +142,18 @@ int run_view_headless(const ViewOptions& o) {
     std::cout << "strata view: " << frames << " frames, " << session.scene().walker_count() << " walkers, saved "
               << o.headless_png << "\n";
   } catch (const std::exception& e) {
-    std::cerr << "strata view: " << e.what() << "\n";
+    print_error("view", error_text(e));
     return 1;
   }
   return 0;
 }
 
 int run_view(const ViewOptions& o) {
+  if (!check_outputs("view", {{"--screenshot-dir", o.screenshot_dir, true}})) return kExitFailure;
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   try {
+    check_scene_inputs(o.scene);
     ViewSession session(o.scene);
     apply_start_options(o, session);
     ViewPanelState& panel = session.panel();
@@ -173,6 +178,7 @@ int run_view(const ViewOptions& o) {
     std::size_t frame = 0, screenshots = 0;
     auto last = std::chrono::steady_clock::now();
     auto title_time = last;
+    const bool live_status = stderr_is_terminal();
 
     while (!window.should_close() && (o.frames == 0 || frame < o.frames)) {
       WindowInput input = window.poll_events();
@@ -266,15 +272,17 @@ int run_view(const ViewOptions& o) {
       ++frame;
       if (now - title_time > std::chrono::milliseconds(500)) {
         panel.fps = mean_fps(profiler);
-        std::fprintf(stderr, "\r%s   ", timing_title(profiler, panel.fps).c_str());
+        // A line that rewrites itself only on a terminal; in a log the '\r' lines would pile up, and the table
+        // printed on exit has the same numbers.
+        if (live_status) std::fprintf(stderr, "\r%s   ", timing_title(profiler, panel.fps).c_str());
         title_time = now;
       }
     }
-    std::fputc('\n', stderr);
+    if (live_status) std::fputc('\n', stderr);
     std::cout << "strata view: " << frame << " frames, " << session.scene().walker_count() << " walkers\n";
     profiler.print_table(std::cout);
   } catch (const std::exception& e) {
-    std::cerr << "strata view: " << e.what() << "\n";
+    print_error("view", error_text(e));
     return 1;
   }
   return 0;
@@ -286,16 +294,18 @@ void add_view_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ViewOptions>();
   auto* cmd = app.add_subcommand("view", "Open the crowd in a window with an orbit camera (needs a display)");
   add_scene_options(*cmd, o->scene);
-  cmd->add_option("--width", o->width, "Window width")->capture_default_str();
-  cmd->add_option("--height", o->height, "Window height")->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Quit after F frames (0 = run until closed)")->capture_default_str();
+  cmd->add_option("--width", o->width, "Window width")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--height", o->height, "Window height")->capture_default_str()->check(whole_in(1, 16384));
+  cmd->add_option("--frames", o->frames, "Quit after F frames (0 = run until closed)")->capture_default_str()
+      ->check(whole_in(0, 1e9, true));
   cmd->add_flag("--hidden", o->hidden, "Create the window hidden (smoke tests under Xvfb)");
   cmd->add_flag("--no-panel", o->no_panel, "Hide the control panel (crowd, levels, gait, muscles, timings)");
   cmd->add_flag("--skeleton-overlay", o->skeleton_overlay, "Draw the skeletons too when bodies are drawn");
   cmd->add_option("--screenshot-dir", o->screenshot_dir, "Where S saves PNG screenshots")->capture_default_str();
   cmd->add_option("--headless-png", o->headless_png,
                   "No window: render --frames frames (default 30) through EGL and save the last, panel included");
-  cmd->add_option("--tab", o->tab, "Panel tab to open first: Crowd, Gait, Muscles, Timings or Binding");
+  cmd->add_option("--tab", o->tab, "Panel tab to open first: Crowd, Gait, Muscles, Timings or Binding")
+      ->check(CLI::IsMember({"Crowd", "Gait", "Muscles", "Timings", "Binding"}));
   cmd->add_option("--edit-binding", o->edit_joint, "Start the binding editor showing this joint's weights");
   cmd->callback([o, &exit_code] {
     if (!o->headless_png.empty()) {

@@ -2,7 +2,6 @@
 // Outputs of `strata crowd` beside frames and profile: the paper's Table 1 for the rig's body levels, and an MP4
 // of the rendered frames through an ffmpeg child process.
 #include <cstdint>
-#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -37,9 +36,27 @@ nlohmann::json table1_json(const std::vector<Table1Row>& rows);
 // The first executable `name` on PATH, or empty.
 std::filesystem::path find_on_path(const std::string& name);
 
+// ---- The output directory a crowd run owns ----------------------------------------------------------------------
+// Policy (docs/commands.md "Outputs of strata crowd"): a run owns its --out. A directory that does not exist is
+// created; an empty one is used; one holding an earlier crowd output (summary.json with "command": "crowd") is
+// emptied of exactly the files that output's manifest ("files") lists, and of the names a crowd run writes when
+// the manifest is one a run left while running (killed); any other non-empty directory is refused, so a typo in
+// --out cannot delete a user's files. Overwriting file by file (the old behaviour) was rejected: a shorter run
+// left the longer run's later frames and video beside a summary that did not list them.
+struct OutputClaim {
+  std::string refused;             // non-empty: why the directory cannot be used
+  std::size_t removed = 0;         // files of the earlier output removed
+  std::size_t stale_temporaries = 0;  // temporary files of killed runs removed
+};
+OutputClaim claim_crowd_output_dir(const std::filesystem::path& dir);
+// Removes ".NAME.PID.N.tmp" files (io/atomic_file.h) whose writer process no longer runs. Returns how many.
+std::size_t remove_stale_temporaries(const std::filesystem::path& dir);
+
 // Raw RGBA frames (top row first) piped into `ffmpeg -f rawvideo -pix_fmt rgba -s WxH -r FPS -i - ... out.mp4`
 // (yuv420p, cropped to even dimensions, which yuv420p needs). ffmpeg's own messages go to its stderr at level
-// "error" only.
+// "error" only. ffmpeg runs in a process group of its own, so a Ctrl-C at the terminal reaches strata alone,
+// which then finishes the frame and closes the video properly (ffmpeg would otherwise stop on the same signal
+// and leave a truncated file).
 class Mp4Writer {
  public:
   // Starts ffmpeg; throws std::runtime_error when it cannot be started.
@@ -57,7 +74,9 @@ class Mp4Writer {
   std::filesystem::path out_;
   std::size_t frame_bytes_ = 0;
   std::size_t frames_ = 0;
-  FILE* pipe_ = nullptr;
+  int pipe_ = -1;   // write end of ffmpeg's stdin
+  int pid_ = -1;    // the ffmpeg process
+  int wait_child(); // its exit status, or -1
 };
 
 }  // namespace strata::cli

@@ -13,6 +13,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "scene/scene_setup.h"
 #include "apps/json_output.h"
@@ -209,6 +210,7 @@ void write_figure(PosedWalker& walker, const std::filesystem::path& dir) {
 }
 
 int run_muscle_report(const MuscleReportOptions& o) {
+  if (!check_outputs("report muscle", {{"--json", o.json}, {"--images", o.images, true}})) return kExitFailure;
   try {
     nlohmann::json out;
     nlohmann::json levels = nlohmann::json::array();
@@ -288,7 +290,7 @@ int run_muscle_report(const MuscleReportOptions& o) {
                 set.lines.size(), set.point_count, b0.size(), rest_max, increasing ? "yes" : "NO",
                 relaxes ? "yes" : "NO", nan_count, ok ? "met" : "MISSED");
   } catch (const std::exception& e) {
-    std::cerr << "strata report muscle: " << e.what() << "\n";
+    print_error("report muscle", error_text(e));
     return 1;
   }
   return 0;
@@ -302,7 +304,8 @@ void add_muscle_report(CLI::App& report, int& exit_code) {
                                               "elbow flexion, relaxation, NaN, kernel vs scalar twin");
   cmd->add_option("--json", o->json, "Write the report here");
   cmd->add_option("--images", o->images, "Write the paper's Figure 6 (raised, flexed without / with muscles) here");
-  cmd->add_option("--seconds", o->seconds, "Seconds of walking checked for NaN per level")->capture_default_str();
+  cmd->add_option("--seconds", o->seconds, "Seconds of walking checked for NaN per level")->capture_default_str()
+      ->check(positive_up_to(3600));
   cmd->callback([o, &exit_code] { exit_code = run_muscle_report(*o); });
 }
 

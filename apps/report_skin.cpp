@@ -11,6 +11,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "reference/skin_walk.h"
@@ -78,6 +79,7 @@ nlohmann::json quality_json(const Quality& q) {
 }
 
 int run_skin_report(const SkinReportOptions& o) {
+  if (!check_outputs("report skin", {{"--json", o.json}})) return kExitFailure;
   try {
     const Rig rig = to_rig(load_default_humanoid());
     const BodyLevels& levels = default_body();
@@ -136,7 +138,7 @@ int run_skin_report(const SkinReportOptions& o) {
     std::printf("cage: %zu vertices, %zu triangles; targets %s\n", levels.cage.vertex_count(),
                 levels.cage.triangle_count(), targets ? "met" : "MISSED");
   } catch (const std::exception& e) {
-    std::cerr << "strata report skin: " << e.what() << "\n";
+    print_error("report skin", error_text(e));
     return 1;
   }
   return 0;
@@ -148,7 +150,7 @@ void add_skin_report(CLI::App& report, int& exit_code) {
   auto o = std::make_shared<SkinReportOptions>();
   auto* skin = report.add_subcommand("skin", "Measure the default body's levels, binding and skinning quality");
   skin->add_option("--json", o->json, "Write the report here");
-  skin->add_option("--seconds", o->seconds, "Seconds of walking measured")->capture_default_str();
+  skin->add_option("--seconds", o->seconds, "Seconds of walking measured")->capture_default_str()->check(positive_up_to(3600));
   skin->add_flag("!--no-automatic", o->automatic, "Skip the automatic (bone heat) binding comparison");
   skin->callback([o, &exit_code] { exit_code = run_skin_report(*o); });
 }

@@ -18,6 +18,7 @@
 #include <opensubdiv/far/stencilTable.h>
 #include <opensubdiv/far/stencilTableFactory.h>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "io/hanim_loader.h"
@@ -201,6 +202,7 @@ void flex(const Skeleton& s, const WalkerLanes& lanes, SoaTable& walkers) {
 }
 
 int run_subdiv_report(const SubdivReportOptions& o) {
+  if (!check_outputs("report subdiv", {{"--json", o.json}})) return kExitFailure;
   // One core: every number is per core, like the skin benchmarks.
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   try {
@@ -368,7 +370,7 @@ int run_subdiv_report(const SubdivReportOptions& o) {
     if (!o.json.empty()) write_json_file(o.json, out);
     std::printf("refine target (<= 30 ns per refined vertex, one core) %s\n", refine_ok ? "met" : "MISSED");
   } catch (const std::exception& e) {
-    std::cerr << "strata report subdiv: " << e.what() << "\n";
+    print_error("report subdiv", error_text(e));
     return 1;
   }
   return 0;
@@ -382,7 +384,7 @@ void add_subdiv_report(CLI::App& report, int& exit_code) {
                                               "levels, and measure the refined surface's deviation from level 0");
   cmd->add_option("--json", o->json, "Write the report here");
   cmd->add_option("--batches", o->batches, "Timing batches per measurement (the best is kept)")->capture_default_str()
-      ->check(CLI::Range(1, 1000));
+      ->check(whole_in(1, 1000));
   cmd->callback([o, &exit_code] { exit_code = run_subdiv_report(*o); });
 }
 

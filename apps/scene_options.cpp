@@ -1,14 +1,81 @@
 #include "apps/scene_options.h"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
+#include "apps/cli_support.h"
+
+#include <algorithm>
+#include <filesystem>
 #include <string>
+
+#include "io/load_error.h"
+#include "scene/input_formats.h"
 
 namespace strata::cli {
 
+void add_input_limit_option(CLI::App& cmd) {
+  cmd.add_option_function<double>(
+         "--max-input-mb",
+         [](double mb) { set_input_size_limit(static_cast<std::uint64_t>(mb * 1024.0 * 1024.0)); },
+         "Largest input file read, in MiB (default 1024); larger files are refused before reading")
+      ->check(positive_up_to(1024.0 * 1024.0));
+}
+
+void check_scene_inputs(const SceneOptions& o) {
+  auto check = [](const std::string& flag, const std::string& path, bool directory_ok) {
+    if (path.empty()) return;
+    try {
+      check_input_path(path, directory_ok);
+    } catch (const LoadError& e) {
+      throw LoadError(flag + ": " + e.what());
+    }
+  };
+  check("--skeleton", o.skeleton, false);
+  check("--mesh", o.mesh, true);  // a MakeHuman folder is a directory
+  if (std::filesystem::path(o.motion).has_extension()) check("--motion", o.motion, false);
+  if (o.muscles != "default" && o.muscles != "none") check("--muscles", o.muscles, false);
+  check("--muscle-overrides", o.muscle_overrides, false);
+  check("--binding-overrides", o.binding_overrides, false);
+}
+
+std::uint64_t estimate_crowd_bytes(const SceneOptions& o) {
+  // Vertices per walker of the shipped body's levels and of the cage refined S1-S3 (docs/skin.md); under auto
+  // walkers spread over the levels, so the coarsest counts.
+  constexpr std::uint64_t kMeshVertices[] = {17'953, 8'923, 5'133};
+  constexpr std::uint64_t kSubdivVertices[] = {1'800, 7'194, 28'770, 115'074};
+  std::uint64_t vertices = 0;
+  if (o.mesh.empty() && o.skeleton.empty() && !o.level.is_none()) {
+    if (o.level.is_mesh()) vertices = kMeshVertices[std::min(o.level.index(), 2)];
+    else if (o.level.is_subdiv()) vertices = kSubdivVertices[std::min(o.level.index(), 3)];
+    else vertices = kMeshVertices[2];
+  }
+  // Skinned storage: position and normal, 6 floats per vertex. Joint state: world and skinning matrices, local
+  // rotations and the IK and gait columns, about 50 floats for each of the 25 joints.
+  constexpr std::uint64_t kJointBytes = 25 * 50 * sizeof(float);
+  return static_cast<std::uint64_t>(o.walkers) * (vertices * 6 * sizeof(float) + kJointBytes);
+}
+
+std::string check_crowd_memory(const SceneOptions& o) {
+  const std::string why = check_memory(estimate_crowd_bytes(o), std::to_string(o.walkers) + " walkers at --level " +
+                                                                    o.level.name());
+  return why.empty() ? why : why + "; use fewer --walkers or a coarser --level";
+}
+
+nlohmann::json scene_inputs_json(const SceneOptions& o) {
+  auto file = [](const std::string& path) { return path.empty() ? nlohmann::json(nullptr) : nlohmann::json(path); };
+  return {{"skeleton", file(o.skeleton)},
+          {"mesh", file(o.mesh)},
+          {"motion", file(o.motion)},  // null: walk when the skeleton can, else its clips
+          {"muscles", o.muscles},
+          {"muscle_overrides", file(o.muscle_overrides)},
+          {"binding_overrides", file(o.binding_overrides)}};
+}
+
 void add_scene_options(CLI::App& cmd, SceneOptions& o) {
+  add_input_limit_option(cmd);
   cmd.add_option("--walkers,-n", o.walkers, "Number of walkers on the ground grid")->capture_default_str()
-      ->check(CLI::Range(std::size_t{1}, std::size_t{10'000'000}));
+      ->check(whole_in(1, 10'000'000, true));
   cmd.add_option("--motion", o.motion,
                  "What moves the walkers: 'walk' (walk generator along a track; the default), 'clip' (the "
                  "file's own animation) or FILE.bvh (motion capture retargeted onto the skeleton, feet locked by IK)");
@@ -19,9 +86,14 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
                  "or an X3D H-Anim file with a skin (plays its interpolators)");
   cmd.add_option("--clip", o.clip, "Clip to play: a name, an index, or 'all' (default: all clips together)");
   cmd.add_flag("--rest", o.rest, "Hold the rest pose instead of playing a clip");
-  cmd.add_option("--seed", o.seed, "Seed for per-walker phase, rate and heading")->capture_default_str();
-  cmd.add_option("--spacing", o.spacing, "Metres between walkers on the grid")->capture_default_str();
-  cmd.add_option("--threads", o.threads, "Worker threads (0 = all cores)")->capture_default_str();
+  // Up to 2^53: every seed survives a round trip through summary.json in any JSON reader (doubles), and "-1" is
+  // refused rather than wrapped to 2^64-1 as CLI11's unsigned conversion does.
+  cmd.add_option("--seed", o.seed, "Seed for per-walker phase, rate and heading")->capture_default_str()
+      ->check(whole_in(0, 9007199254740992.0, true));
+  cmd.add_option("--spacing", o.spacing, "Metres between walkers on the grid")->capture_default_str()
+      ->check(positive_up_to(1000));
+  cmd.add_option("--threads", o.threads, "Worker threads (0 = all cores; more than the cores run as many as the cores)")
+      ->capture_default_str()->check(whole_in(0, 4096));
   // Parsed by DetailLevel::parse, the one place that knows level names; the validator runs first so a bad value
   // is a usage error naming the flag rather than an exception from the callback.
   const CLI::Validator body_level(
@@ -40,7 +112,7 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
                  "Muscle layer: 'default' (the shipped 12 action lines, data/muscles.json), 'none', or a muscle "
                  "file (format: io/muscle_file.h)")->capture_default_str();
   cmd.add_option("--muscle-gain", o.muscle_gain, "Scale every muscle's forces (0 = no bulge, 1 = as in the file)")
-      ->capture_default_str()->check(CLI::Range(0.0f, 100.0f));
+      ->capture_default_str()->check(finite_in(0, 100));
   cmd.add_option("--muscle-overrides", o.muscle_overrides,
                  "JSON file of per-muscle gains, e.g. {\"gain\": 1, \"muscles\": {\"l_biceps\": 2}}");
   cmd.add_option("--binding-overrides", o.binding_overrides,

@@ -35,8 +35,11 @@ void AtomicFile::commit() {
   std::error_code ec;
   std::filesystem::rename(temp_, target_, ec);
   if (ec) {
-    std::filesystem::remove(temp_, ec);
-    throw std::runtime_error("cannot write '" + target_.string() + "': rename failed: " + ec.message());
+    // The reason is taken before the clean-up, whose own error_code would overwrite it ("rename failed: Success").
+    const std::string reason = ec.message();
+    std::error_code ignored;
+    std::filesystem::remove(temp_, ignored);
+    throw std::runtime_error("cannot write '" + target_.string() + "': rename failed: " + reason);
   }
   committed_ = true;
 }

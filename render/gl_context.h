@@ -16,6 +16,16 @@ class GlContext {
   // GL_RENDERER / GL_VERSION strings of the live context, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
   std::string renderer() const;
   std::string version() const;
+  // Limits of the live context that decide whether a render target can be made: the largest renderbuffer side
+  // (GL_MAX_RENDERBUFFER_SIZE), the largest viewport (GL_MAX_VIEWPORT_DIMS) and the most MSAA samples
+  // (GL_MAX_SAMPLES). Commands check a requested image size against them before a run, rather than meeting an
+  // incomplete framebuffer at its first frame.
+  struct Limits {
+    int max_renderbuffer_size = 0;
+    int max_viewport_width = 0, max_viewport_height = 0;
+    int max_samples = 0;
+  };
+  Limits limits() const;
 };
 
 // AddressSanitizer builds: keeps the GL driver libraries loaded so that LeakSanitizer can name them (see

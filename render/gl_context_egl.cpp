@@ -29,6 +29,17 @@ std::string GlContext::renderer() const {
   return s ? reinterpret_cast<const char*>(s) : std::string{};
 }
 
+GlContext::Limits GlContext::limits() const {
+  Limits l;
+  GLint viewport[2] = {0, 0};
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &l.max_renderbuffer_size);
+  glGetIntegerv(GL_MAX_VIEWPORT_DIMS, viewport);
+  glGetIntegerv(GL_MAX_SAMPLES, &l.max_samples);
+  l.max_viewport_width = viewport[0];
+  l.max_viewport_height = viewport[1];
+  return l;
+}
+
 std::string GlContext::version() const {
   const GLubyte* s = glGetString(GL_VERSION);
   return s ? reinterpret_cast<const char*>(s) : std::string{};

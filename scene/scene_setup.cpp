@@ -140,6 +140,11 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   }
   spawn_crowd(*scene, config);
   set_detail_level(*scene, o.level);
+  if (o.level.is_mesh() && scene->rig().body && static_cast<std::size_t>(o.level.index()) >= scene->rig().body->levels.size())
+    throw std::invalid_argument("--level " + o.level.name() + ": the body has " +
+                                std::to_string(scene->rig().body->levels.size()) +
+                                " level(s); use 0 to " + std::to_string(scene->rig().body->levels.size() - 1) +
+                                ", auto or -1");
   if (o.level.is_subdiv() && scene->skin.level != o.level)
     throw std::invalid_argument("--level " + o.level.name() +
                                 " needs a subdivision cage; only the shipped body has one");
@@ -152,6 +157,11 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   return scene;
 }
 
-int thread_count(const SceneOptions& o) { return o.threads > 0 ? o.threads : tbb::info::default_concurrency(); }
+// Capped at the cores TBB will use: global_control only limits parallelism, so asking for 1000 threads on two
+// cores runs two, and summaries must report the two.
+int thread_count(const SceneOptions& o) {
+  const int cores = tbb::info::default_concurrency();
+  return o.threads > 0 ? std::min(o.threads, cores) : cores;
+}
 
 }  // namespace strata

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
 
@@ -20,7 +21,61 @@ TEST(InputFormats, IdentifiesByExtensionCaseInsensitivelyAndFoldersAsMakeHuman) 
   EXPECT_EQ(identify_input("body.Obj").id, InputFormatId::Obj);
   EXPECT_EQ(identify_input("man.glb").id, InputFormatId::Gltf);
   EXPECT_EQ(identify_input("man.gltf").id, InputFormatId::Gltf);
-  EXPECT_EQ(identify_input(std::filesystem::temp_directory_path()).id, InputFormatId::MakeHuman);
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "strata_input_formats_mh";
+  std::filesystem::create_directories(folder);
+  std::ofstream(folder / "base.obj") << "v 0 0 0\n";
+  EXPECT_EQ(identify_input(folder).id, InputFormatId::MakeHuman);
+  std::filesystem::remove_all(folder);
+}
+
+// A folder without base.obj is not taken for MakeHuman.
+TEST(InputFormats, AnyOtherFolderIsRefused) {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "strata_input_formats_empty";
+  std::filesystem::create_directories(folder);
+  EXPECT_THROW(identify_input(folder), LoadError);
+  std::filesystem::remove_all(folder);
+}
+
+// The first bytes win over a wrong extension; files that do not say go by the extension.
+TEST(InputFormats, ContentDecidesWhenTheExtensionIsWrong) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "strata_input_formats_sniff";
+  fs::create_directories(dir);
+  std::ofstream(dir / "walk.x3d") << "HIERARCHY\nROOT hips\n";
+  std::ofstream(dir / "body.xml") << "# exported\nv 0 0 0\nf 1 1 1\n";
+  std::ofstream(dir / "man.bvh", std::ios::binary) << "glTF\x02\0\0\0";
+  std::ofstream(dir / "skel.obj") << "<?xml version='1.0'?><X3D/>";
+  std::ofstream(dir / "man.x3d") << "{\"asset\": {\"version\": \"2.0\"}}";
+  std::ofstream(dir / "odd.bvh") << "hello";
+  EXPECT_EQ(identify_input(dir / "walk.x3d").id, InputFormatId::Bvh);
+  EXPECT_EQ(identify_input(dir / "body.xml").id, InputFormatId::Obj);
+  EXPECT_EQ(identify_input(dir / "man.bvh").id, InputFormatId::Gltf);
+  EXPECT_EQ(identify_input(dir / "skel.obj").id, InputFormatId::HAnim);
+  EXPECT_EQ(identify_input(dir / "man.x3d").id, InputFormatId::Gltf);
+  EXPECT_EQ(identify_input(dir / "odd.bvh").id, InputFormatId::Bvh);
+  fs::remove_all(dir);
+}
+
+TEST(InputFormats, DevicesLoopsAndOversizedFilesAreRefusedBeforeReading) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "strata_input_formats_checks";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  EXPECT_THROW(identify_input("/dev/zero"), LoadError);
+  fs::create_symlink(dir / "b.x3d", dir / "a.x3d");
+  fs::create_symlink(dir / "a.x3d", dir / "b.x3d");
+  try {
+    identify_input(dir / "a.x3d");
+    FAIL() << "no error";
+  } catch (const LoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("symbolic link loop"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "big.bvh") << std::string(2048, ' ');
+  set_input_size_limit(1024);
+  EXPECT_THROW(identify_input(dir / "big.bvh"), LoadError);
+  set_input_size_limit(kDefaultInputSizeLimit);
+  EXPECT_EQ(identify_input(dir / "big.bvh").id, InputFormatId::Bvh);
+  fs::remove_all(dir);
 }
 
 TEST(InputFormats, EveryExtensionBelongsToOneFormat) {
