@@ -215,6 +215,17 @@ std::string check_memory(std::uint64_t needed, std::string_view what) {
   return std::string(what) + " needs about " + gib(needed) + " of memory, " + gib(available) + " is available";
 }
 
+std::unique_ptr<CrowdRenderer> make_checked_renderer(GlContext& context, int width, int height, std::string& error) {
+  error = check_render_size(context.limits(), width, height);
+  if (!error.empty()) return nullptr;
+  try {
+    return std::make_unique<CrowdRenderer>(width, height);
+  } catch (const std::exception& e) {
+    error = render_target_error(width, height, context.limits(), e);
+    return nullptr;
+  }
+}
+
 namespace {
 std::atomic<int> g_signal{0};
 

@@ -6,11 +6,13 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <string>
 #include <string_view>
 
 #include <CLI/CLI.hpp>
 
+#include "render/crowd_renderer.h"
 #include "render/gl_context.h"
 
 namespace strata::cli {
@@ -73,6 +75,10 @@ bool check_outputs(std::string_view command, std::initializer_list<OutputPath> o
 std::string check_render_size(const GlContext::Limits& limits, int width, int height);
 // The one-line reason when the renderer could not make a width x height target although the limits allowed it.
 std::string render_target_error(int width, int height, const GlContext::Limits& limits, const std::exception& e);
+// The renderer for --width/--height, made before any work (crowd, soak --render, bench --render): the size is
+// checked against the context's limits, then the render target is built, so a size the driver refuses fails at
+// once with the flags named. Null, with `error` set, on failure.
+std::unique_ptr<CrowdRenderer> make_checked_renderer(GlContext& context, int width, int height, std::string& error);
 
 // ---- Errors ----------------------------------------------------------------------------------------------------
 // The one-line text for an exception that ended a command: std::bad_alloc becomes an out-of-memory message that

@@ -35,9 +35,7 @@ struct BenchOptions {
 // The crowd render pass (skinned bodies streamed every frame, one multi-draw per level) against the fastest way
 // to draw the same triangles: each level's mesh uploaded once and drawn with glDrawElementsInstanced, one copy per
 // walker at its position. Same target, material and camera; ground and skeletons off; each timed to glFinish.
-nlohmann::json render_bench(Crowd& scene, const BenchOptions& o) {
-  auto context = create_headless_gl_context();
-  CrowdRenderer renderer(o.width, o.height);
+nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& context, CrowdRenderer& renderer) {
   renderer.options().draw_ground = false;
   renderer.options().draw_skeleton = false;
   const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
@@ -81,7 +79,7 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o) {
   const double crowd_rate = crowd_s > 0 ? double(crowd_triangles) / crowd_s : 0.0;
   const double raw_rate = raw_s > 0 ? double(raw_triangles) / raw_s : 0.0;
   nlohmann::json j;
-  j["gl_renderer"] = context->renderer();
+  j["gl_renderer"] = context.renderer();
   j["width"] = o.width;
   j["height"] = o.height;
   j["crowd_triangles_per_second"] = crowd_rate;
@@ -103,6 +101,18 @@ int run_bench(const BenchOptions& o) {
   try {
     check_scene_inputs(o.scene);
     std::unique_ptr<Crowd> scene = build_scene(o.scene);
+    // --render: the context and render target first, so a size the driver refuses fails before the timed frames.
+    std::unique_ptr<GlContext> context;
+    std::unique_ptr<CrowdRenderer> renderer;
+    if (o.render) {
+      context = create_headless_gl_context();
+      std::string why;
+      renderer = make_checked_renderer(*context, o.width, o.height, why);
+      if (!renderer) {
+        print_error("bench", why);
+        return kExitFailure;
+      }
+    }
     // Warm-up frames settle caches and the thread pool; they are not measured. After the first, a camera framing
     // the crowd (as strata crowd's) is handed to the level-of-detail stage, so the timed frames are the frame every
     // command runs, culling and --level auto included.
@@ -150,7 +160,7 @@ int run_bench(const BenchOptions& o) {
                          {"max_ms", s.max_ms}});
     j["systems"] = systems;
     if (o.render && !stopped) {
-      const nlohmann::json r = render_bench(*scene, o);
+      const nlohmann::json r = render_bench(*scene, o, *context, *renderer);
       j["render"] = r;
       std::printf("render pass (%s, %dx%d): crowd %.3g triangles/s (%.1f ms/frame), raw instanced %.3g triangles/s "
                   "(%.1f ms/frame), ratio %.2f\n",

@@ -80,7 +80,12 @@ int run_soak(const SoakOptions& o) {
     std::vector<std::uint8_t> pixels;
     if (o.render) {
       context = create_headless_gl_context();
-      renderer = std::make_unique<CrowdRenderer>(o.width, o.height);
+      std::string why;
+      renderer = make_checked_renderer(*context, o.width, o.height, why);
+      if (!renderer) {
+        print_error("soak", why);
+        return kExitFailure;
+      }
     }
     // A rolling window and no trace: the profiler itself must not grow with the run.
     Profiler profiler(120, false);

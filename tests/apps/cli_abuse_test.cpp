@@ -221,6 +221,12 @@ std::vector<Case> more_cases() {
   rows.push_back({"MuscleImagesUnderAFile", "report muscle --images {in}/a_file/fig", 1, "strata report muscle: --images: ", {}, {}});
   rows.push_back({"CrowdTooLargeForGl", "crowd --walkers 1 --frames 1 --level -1 --width 16384 --height 16384 --no-mp4 --out {out}", 1,
                   "strata crowd: --width/--height: ", {}, {"."}});
+  rows.push_back({"BenchRenderTooLargeForGlFailsBeforeTheRun",
+                  "bench --render --walkers 1 --frames 2 --width 16384 --height 16384", 1,
+                  "strata bench: --width/--height: ", {}, {}});
+  rows.push_back({"SoakRenderTooLargeForGlFailsAtOnce",
+                  "soak --render --seconds 3600 --walkers 1 --width 16384 --height 16384", 1,
+                  "strata soak: --width/--height: ", {}, {}});
   rows.push_back({"CrowdTooLargeForMemory", "crowd --walkers 10000000 --out {out}", 1,
                   "10000000 walkers at --level 0 needs about", {}, {"."}});
   rows.push_back({"CrowdLevelAboveAnImportedBody", "crowd --mesh {in}/MAN.GLB --muscles none --level 1" + kTiny + " --out {out}", 1,
