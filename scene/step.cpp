@@ -85,6 +85,7 @@ void lod_stage(Crowd& crowd, FrameProfile& profile) {
     job.previous_level = previous;
     job.fixed_level = level.is_automatic() ? -1 : level.index();
     job.levels = levels;
+    job.culled_slot = static_cast<std::uint8_t>(DetailSlot::Culled);
     const WalkerLanes lanes = walker_lanes(t, crowd.joint_count());
     job.walkers = lanes.count;
     job.stride = lanes.stride;
@@ -100,7 +101,8 @@ void lod_stage(Crowd& crowd, FrameProfile& profile) {
   for (std::size_t s = 0; s < kDetailSlots; ++s) {
     const SoaTable& t = crowd.world.table(crowd.tables[s]);
     for (std::size_t b = 0; b < t.size(); ++b)
-      if (lod.decided[s][b] != s) moves.emplace_back(t.owner(static_cast<std::uint32_t>(b)), static_cast<DetailSlot>(lod.decided[s][b]));
+      if (lod.decided[s][b] != s)
+        moves.emplace_back(t.owner(static_cast<std::uint32_t>(b)), static_cast<DetailSlot>(lod.decided[s][b]));
   }
   for (const auto& [walker, to] : moves) crowd.world.move(walker, crowd.tables[slot_index(to)]);
   profile.moved = moves.size();

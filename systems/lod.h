@@ -49,7 +49,7 @@ struct LodJob {
   int previous_level = -1;    // the mesh level the table holds, or -1 (culled or never decided: no hysteresis)
   int fixed_level = -1;       // >= 0: every visible walker gets this level (culling only); -1: the automatic policy
   int levels = 1;             // mesh levels the body has (1..3)
-  std::uint8_t culled_slot = 4;  // the value written for a culled walker (DetailSlot::Culled)
+  std::uint8_t culled_slot = 4;  // the value written for a culled walker (the caller's culled table, scene/crowd.h)
   std::size_t walkers = 0;
   std::size_t stride = 0;
   const float* placement = nullptr;
