@@ -132,7 +132,6 @@ int run_crowd(const CrowdOptions& o) {
     OrbitCamera camera;
     camera.yaw = o.camera_yaw;
     camera.pitch = o.camera_pitch;
-    std::vector<glm::vec3> joints;
     std::vector<std::uint8_t> pixels;
     ProgressLine bar("frames", o.progress);
     const float dt = 1.0f / o.fps;
@@ -160,16 +159,15 @@ int run_crowd(const CrowdOptions& o) {
         step(scene, dt, profiler);
         {
           STRATA_PROFILE_SCOPE(profiler, "render");
-          gather_crowd_joints(scene, joints);
           if (f == 0) {
             // Frame the crowd once from its first pose; a camera that re-fits every frame would pump. Bodies
             // reach past the joints (the skull above skullbase, the soles below the ankles).
-            glm::vec3 lo, hi;
-            const bool any = bodies ? body_bounds(scene, lo, hi) : joint_bounds(joints, lo, hi);
-            if (any) camera.frame_box_tight(lo, hi, aspect);
+            frame_crowd(scene, camera, aspect, scratch);
           } else if (o.follow) {
+            // Joints gathered here only when followed: render_frame gathers its own for the skeleton pass.
+            gather_crowd_joints(scene, scratch.joints);
             glm::vec3 lo, hi;
-            if (joint_bounds(joints, lo, hi)) camera.target = 0.5f * (lo + hi);
+            if (joint_bounds(scratch.joints, lo, hi)) camera.target = 0.5f * (lo + hi);
           }
           // From the next frame on, walkers outside this camera are culled and --level auto picks by size.
           render_frame(scene, renderer, camera, aspect, o.height, scratch, draw);
