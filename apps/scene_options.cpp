@@ -99,15 +99,24 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   const CLI::Validator body_level(
       [](std::string& value) -> std::string {
         if (DetailLevel::parse(value)) return {};
-        return "must be 0, 1, 2, auto, S1, S2, S3 or -1, got '" + value + "'";
+        return "must be 0, 1, 2, auto, impostor, S1, S2, S3 or -1, got '" + value + "'";
       },
-      "0|1|2|auto|S1|S2|S3|-1");
+      "0|1|2|auto|impostor|S1|S2|S3|-1");
   cmd.add_option_function<std::string>(
          "--level", [&o](const std::string& value) { o.level = *DetailLevel::parse(value); },
          "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133); auto: each walker by its height "
-         "on screen (with hysteresis); S1, S2, S3: the 1,800-vertex cage skinned and Loop-subdivided 1-3 "
-         "times every frame (7,194 / 28,770 / 115,074 vertices); -1 for skeletons only")
+         "on screen (with hysteresis): levels 0-2, then impostors (walking crowds), the nearest --mesh-budget "
+         "as meshes; impostor: every walker an impostor; S1, S2, S3: the 1,800-vertex cage skinned and "
+         "Loop-subdivided 1-3 times every frame (7,194 / 28,770 / 115,074 vertices); -1 for skeletons only")
       ->check(body_level)->default_str(o.level.name());
+  cmd.add_option("--mesh-budget", o.mesh_budget,
+                 "Under --level auto, the most walkers drawn as meshes in a frame (the nearest); the rest of the "
+                 "visible walkers are impostors. 0 = no cap")
+      ->capture_default_str()->check(whole_in(0, 10000000));
+  cmd.add_option("--impostor-px", o.impostor_px,
+                 "Under --level auto, walkers shorter than this many pixels on screen are drawn as impostors "
+                 "(0 = none)")
+      ->capture_default_str()->check(finite_in(0, 100000));
   cmd.add_option("--muscles", o.muscles,
                  "Muscle layer: 'default' (the shipped 12 action lines, data/muscles.json), 'none', or a muscle "
                  "file (format: io/muscle_file.h)")->capture_default_str();

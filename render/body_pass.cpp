@@ -41,10 +41,16 @@ BodyPass::BodyPass()
 
 void BodyPass::check(const BodySource& bodies) const {
   const std::size_t n = bodies.batch_count();
-  if (n > kMaxBatches)
-    throw std::invalid_argument("crowd renderer: at most " + std::to_string(kMaxBatches) + " body levels per frame");
+  std::size_t skinned = 0;
   for (std::size_t k = 0; k < n; ++k)
-    std::visit(Overloads{[&](const BodyDrawInput& b) { check_batch(b, slots_[k]); }}, bodies.batch(k));
+    std::visit(Overloads{[&](const BodyDrawInput& b) {
+                           if (skinned == kMaxBatches)
+                             throw std::invalid_argument("crowd renderer: at most " + std::to_string(kMaxBatches) +
+                                                         " body levels per frame");
+                           check_batch(b, slots_[skinned++]);
+                         },
+                         [&](const ImpostorBatch& b) { ImpostorPass::check(b); }},
+               bodies.batch(k));
 }
 
 void BodyPass::check_batch(const BodyDrawInput& b, const TopologyBuffer& slot) const {
@@ -62,9 +68,16 @@ void BodyPass::check_batch(const BodyDrawInput& b, const TopologyBuffer& slot) c
 void BodyPass::draw(const BodySource& bodies, const glm::mat4& view, const glm::mat4& projection,
                     const glm::vec3& skin_color) {
   triangles_drawn_ = 0;
+  if (impostors_) impostors_->reset_count();
   const std::size_t n = bodies.batch_count();
+  std::size_t skinned = 0;
   for (std::size_t k = 0; k < n; ++k)
-    std::visit(Overloads{[&](const BodyDrawInput& b) { draw_batch(b, slots_[k], view, projection, skin_color); }},
+    std::visit(Overloads{[&](const BodyDrawInput& b) { draw_batch(b, slots_[skinned++], view, projection, skin_color); },
+                         [&](const ImpostorBatch& b) {
+                           if (b.walker_count == 0) return;
+                           if (!impostors_) impostors_ = std::make_unique<ImpostorPass>();
+                           impostors_->draw(b, view, projection);
+                         }},
                bodies.batch(k));
 }
 
