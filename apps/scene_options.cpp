@@ -53,7 +53,15 @@ std::uint64_t estimate_crowd_bytes(const SceneOptions& o) {
   // Skinned storage: position and normal, 6 floats per vertex. Joint state: world and skinning matrices, local
   // rotations and the IK and gait columns, about 50 floats for each of the 25 joints.
   constexpr std::uint64_t kJointBytes = 25 * 50 * sizeof(float);
-  return static_cast<std::uint64_t>(o.walkers) * (vertices * 6 * sizeof(float) + kJointBytes);
+  const std::uint64_t walkers = o.walkers;
+  const bool walking = o.motion.empty() || o.motion == "walk";
+  if (o.level.is_impostor()) return walkers * kJointBytes;  // no skinned storage; culled walkers keep wide rows
+  if (o.level.is_automatic() && walking && o.mesh_budget > 0 && vertices > 0) {
+    // At most mesh_budget walkers are skinned (at level 0 at worst); the others are impostors or culled.
+    const std::uint64_t meshes = std::min<std::uint64_t>(walkers, o.mesh_budget);
+    return meshes * kMeshVertices[0] * 6 * sizeof(float) + walkers * kJointBytes;
+  }
+  return walkers * (vertices * 6 * sizeof(float) + kJointBytes);
 }
 
 std::string check_crowd_memory(const SceneOptions& o) {

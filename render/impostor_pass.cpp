@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
@@ -46,12 +47,40 @@ void ImpostorPass::upload(const ImpostorAtlas& atlas) {
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glTextureSubImage3D(t, 0, 0, 0, 0, l.layer_width(), l.layer_height(), l.phases, GL_RGBA, GL_UNSIGNED_BYTE,
                         pixels);
-    glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    // Nearest mip level, bilinear within it: trilinear filtering doubled the texel fetches, the impostor's main
+    // cost on a software rasteriser, for a blur far walkers do not need.
+    glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
     glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     glGenerateTextureMipmap(t);
   }
+  // Each cell's covered rectangle, one texel of margin for the bilinear filter; an empty cell keeps a
+  // degenerate rectangle (its quad draws nothing).
+  const int cw = l.cell_width, ch = l.cell_height, W = l.layer_width();
+  std::vector<float> bounds(static_cast<std::size_t>(l.phases * l.elevations * l.azimuths) * 4);
+  for (int k = 0; k < l.phases; ++k)
+    for (int e = 0; e < l.elevations; ++e)
+      for (int a = 0; a < l.azimuths; ++a) {
+        int x0 = cw, y0 = ch, x1 = -1, y1 = -1;
+        const std::uint8_t* layer = atlas.color.data() + static_cast<std::size_t>(k) * l.layer_bytes();
+        for (int y = 0; y < ch; ++y)
+          for (int x = 0; x < cw; ++x)
+            if (layer[(static_cast<std::size_t>(e * ch + y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(a * cw + x)) * 4 + 3] > 0) {
+              x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+            }
+        float* b = bounds.data() + (static_cast<std::size_t>((k * l.elevations + e) * l.azimuths + a)) * 4;
+        if (x1 < 0) {
+          b[0] = b[1] = b[2] = b[3] = 0.5f;
+          continue;
+        }
+        b[0] = static_cast<float>(std::max(x0 - 1, 0)) / static_cast<float>(cw);
+        b[1] = static_cast<float>(std::max(y0 - 1, 0)) / static_cast<float>(ch);
+        b[2] = static_cast<float>(std::min(x1 + 2, cw)) / static_cast<float>(cw);
+        b[3] = static_cast<float>(std::min(y1 + 2, ch)) / static_cast<float>(ch);
+      }
+  cell_bounds_ = GlObject(GlKind::kBuffer);
+  glNamedBufferStorage(cell_bounds_.id(), static_cast<GLsizeiptr>(bounds.size() * sizeof(float)), bounds.data(), 0);
   uploaded_ = &atlas;
   uploaded_key_ = atlas.key;
 }
@@ -83,6 +112,7 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
   glProgramUniform1f(p, glGetUniformLocation(p, "u_depth_range"), atlas.depth_range_m);
   glProgramUniform1i(p, glGetUniformLocation(p, "u_color_atlas"), 0);
   glProgramUniform1i(p, glGetUniformLocation(p, "u_normal_atlas"), 1);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, cell_bounds_.id());
   glBindTextureUnit(0, color_.id());
   glBindTextureUnit(1, normal_.id());
   glBindVertexArray(vao);
@@ -91,6 +121,7 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
   glDisable(GL_SAMPLE_ALPHA_TO_COVERAGE);
   glBindTextureUnit(0, 0);
   glBindTextureUnit(1, 0);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
   drawn_ += b.walker_count;
 }
 

@@ -29,6 +29,9 @@ class ImpostorPass {
   void upload(const ImpostorAtlas& atlas);
 
   GlObject program_, vao_, instances_;
+  // Per cell (phase-major, then elevation, then azimuth), the part of the cell the walker covers, as texture
+  // coordinates within the cell (x0, y0, x1, y1): quads are shrunk to it, which halves the fragments shaded.
+  GlObject cell_bounds_{GlKind::kBuffer};
   GlObject color_{GlKind::kTexture2DArray}, normal_{GlKind::kTexture2DArray};
   const ImpostorAtlas* uploaded_ = nullptr;  // the atlas the textures hold (address and key)
   std::uint64_t uploaded_key_ = 0;

@@ -30,8 +30,12 @@ void main() {
   vec3 surface = v_view_position + v_to_eye * depth;
   vec3 to_eye = normalize(-surface);
   float diffuse = max(dot(n, kToLight), 0.0);
-  float rim = pow(1.0 - clamp(dot(n, to_eye), 0.0, 1.0), 3.0);
-  f_color = vec4(albedo * (0.22 + 0.78 * diffuse) + vec3(0.18 * rim), clamp(c.a * 1.25, 0.0, 1.0));
+  // The rim term fades with coverage: a silhouette texel's normal is perpendicular to a view up to 11 degrees
+  // off the real one (the nearest atlas direction) and stays so over the texel's whole magnified footprint, so the
+  // cubic rim lit a bright outline round every impostor that a mesh's thinner, multisampled silhouette does not
+  // show. Interior texels (coverage 1) keep the full term.
+  float rim = pow(1.0 - clamp(dot(n, to_eye), 0.0, 1.0), 3.0) * c.a * c.a;
+  f_color = vec4(albedo * (0.22 + 0.78 * diffuse) + vec3(0.18 * rim), c.a);
   vec4 clip = u_projection * vec4(surface, 1.0);
   gl_FragDepth = clamp(clip.z / clip.w * 0.5 + 0.5, 0.0, 1.0);
 }

@@ -15,6 +15,7 @@ uniform vec3 u_eye;
 uniform ivec4 u_grid;         // phases, azimuths, elevations, unused
 uniform float u_max_elevation;  // radians
 uniform vec3 u_cell;          // cell width, cell height, centre height (m at scale 1)
+layout(std430, binding = 0) readonly buffer CellBounds { vec4 cell_bounds[]; };
 out vec2 v_uv;                // texture coordinates of the cell's pixel (layer-space, 0..1)
 flat out int v_layer;         // the gait phase's layer
 out vec3 v_view_position;     // of the quad point
@@ -33,18 +34,22 @@ void main() {
   vec3 local = vec3(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
   float azimuth = atan(local.x, local.z);  // 0 in front, towards +X positive
   int A = u_grid.y, E = u_grid.z;
-  int a = int(mod(round(azimuth / kTwoPi * float(A)), float(A)));
-  float elevation = asin(clamp(local.y, -1.0, 1.0));
-  int e = E > 1 ? clamp(int(round(elevation / max(u_max_elevation, 1e-4) * float(E - 1))), 0, E - 1) : 0;
   // Phase k of K at k / K: the nearest. Cross-fading the two neighbours was tried and rejected: where their
   // limbs differ it draws both at half coverage, a pale ghost leg beside each real one.
   v_layer = int(round(fract(a_phase) * float(u_grid.x))) % u_grid.x;
-  // The quad faces the eye, its up the world's up projected onto it, as the bake's orthographic camera was.
+  int a = int(mod(round(azimuth / kTwoPi * float(A)), float(A)));
+  float elevation = asin(clamp(local.y, -1.0, 1.0));
+  int e = E > 1 ? clamp(int(round(elevation / max(u_max_elevation, 1e-4) * float(E - 1))), 0, E - 1) : 0;
+
+  // The quad faces the eye, its up the world's up projected onto it, as the bake's orthographic camera was; it
+  // covers only the part of the cell the walker covers (cell_bounds), so empty texels are not shaded.
   vec3 right = cross(vec3(0.0, 1.0, 0.0), d);
   right = length(right) > 1e-4 ? normalize(right) : vec3(1.0, 0.0, 0.0);
   vec3 up = cross(d, right);
-  vec3 p_world = center + (corner.x - 0.5) * u_cell.x * a_scale * right + (corner.y - 0.5) * u_cell.y * a_scale * up;
-  v_uv = (vec2(a, e) + corner) / vec2(A, E);
+  vec4 b = cell_bounds[(v_layer * E + e) * A + a];
+  vec2 in_cell = mix(b.xy, b.zw, corner);
+  vec3 p_world = center + (in_cell.x - 0.5) * u_cell.x * a_scale * right + (in_cell.y - 0.5) * u_cell.y * a_scale * up;
+  v_uv = (vec2(a, e) + in_cell) / vec2(A, E);
   vec4 view_position = u_view * vec4(p_world, 1.0);
   v_view_position = view_position.xyz;
   v_to_eye = normalize(mat3(u_view) * d);
