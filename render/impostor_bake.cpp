@@ -3,6 +3,7 @@
 #include <epoxy/gl.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -31,7 +32,7 @@ namespace strata {
 namespace {
 
 // Bumped whenever the bake's output for the same inputs changes (framing, encoding, shaders).
-constexpr std::uint32_t kBakeVersion = 1;
+constexpr std::uint32_t kBakeVersion = 2;
 
 struct Hasher {
   std::uint64_t h = 1469598103934665603ull;
@@ -140,13 +141,60 @@ ImpostorAtlas bake_impostor_atlas(const Rig& rig, const GaitStyle& style, const 
   // Two cycles first, so the pelvis and feet are in their steady rhythm rather than the start's.
   for (int i = 0; i < 2 * 120; ++i) step(crowd, 1.0f / 60.0f, profiler);
 
+  // Every phase's skinned body first (world space, the six attribute streams), with the walker's placement, so the
+  // cells can be sized to what the walk really sweeps before anything is drawn.
+  struct PhaseBody {
+    std::array<std::vector<float>, 6> streams;
+    Placement placement;
+  };
+  std::vector<PhaseBody> bodies(static_cast<std::size_t>(layout.phases));
+  const SkinnedCrowd& skinned = crowd.skinned[static_cast<std::size_t>(level)];
+  for (int k = 0; k < layout.phases; ++k) {
+    walk_to_phase(crowd, static_cast<float>(k) / static_cast<float>(layout.phases), profiler);
+    const SoaTable& t = crowd.table(mesh_slot(level));
+    const float heading = t.f32(kWalkerPlacement, 3)[0];
+    const glm::vec3 ground(t.f32(kWalkerPlacement, 0)[0], t.f32(kWalkerPlacement, 1)[0], t.f32(kWalkerPlacement, 2)[0]);
+    PhaseBody& b = bodies[static_cast<std::size_t>(k)];
+    b.placement = Placement{ground, std::cos(heading), std::sin(heading), 1.0f};
+    const float* arrays[6] = {skinned.px.data(), skinned.py.data(), skinned.pz.data(),
+                              skinned.nx.data(), skinned.ny.data(), skinned.nz.data()};
+    for (int a = 0; a < 6; ++a)
+      b.streams[static_cast<std::size_t>(a)].assign(arrays[a], arrays[a] + skinned.vertex_count);
+  }
+
   ImpostorAtlas atlas;
   atlas.layout = layout;
-  atlas.cell_height_m = 1.2f * crowd.skin.body_height;
-  atlas.cell_width_m = 0.6f * crowd.skin.body_height;
   atlas.center_height_m = 0.5f * crowd.skin.body_height;
-  atlas.depth_range_m = 0.45f * crowd.skin.body_height;
   atlas.speed_m_s = options.speed_m_s;
+  // Cell size and depth range: the largest extent of the body, over every phase and every atlas direction, along
+  // the cell's right and up axes and the view axis, plus 4 %. Fixed fractions of the stature were tried first and
+  // cut the feet off in side views at long strides (the test that every walker clears its cell's edge).
+  auto direction = [&](int a, int e) {
+    const float elevation = layout.elevations > 1 ? glm::radians(layout.max_elevation_deg) * static_cast<float>(e) /
+                                                        static_cast<float>(layout.elevations - 1)
+                                                  : 0.0f;
+    const float azimuth = 6.28318530718f * static_cast<float>(a) / static_cast<float>(layout.azimuths);
+    return glm::vec3(std::sin(azimuth) * std::cos(elevation), std::sin(elevation), std::cos(azimuth) * std::cos(elevation));
+  };
+  float half_width = 0.0f, half_height = 0.0f, depth = 0.0f;
+  for (const PhaseBody& b : bodies) {
+    const glm::vec3 center = b.placement.position + glm::vec3(0.0f, atlas.center_height_m, 0.0f);
+    for (int e = 0; e < layout.elevations; ++e)
+      for (int a = 0; a < layout.azimuths; ++a) {
+        const glm::vec3 d = b.placement.direction(direction(a, e));
+        const glm::vec3 right = glm::normalize(glm::cross(glm::vec3(0.0f, 1.0f, 0.0f), d));
+        const glm::vec3 up = glm::cross(d, right);
+        for (std::size_t v = 0; v < b.streams[0].size(); ++v) {
+          const glm::vec3 p = glm::vec3(b.streams[0][v], b.streams[1][v], b.streams[2][v]) - center;
+          half_width = std::max(half_width, std::abs(glm::dot(p, right)));
+          half_height = std::max(half_height, std::abs(glm::dot(p, up)));
+          depth = std::max(depth, std::abs(glm::dot(p, d)));
+        }
+      }
+  }
+  atlas.cell_width_m = 2.0f * 1.04f * half_width;
+  atlas.cell_height_m = 2.0f * 1.04f * half_height;
+  atlas.depth_range_m = 1.04f * depth;
   atlas.key = impostor_atlas_key(rig, style, options);
   const std::size_t layer_bytes = layout.layer_bytes();
   atlas.color.resize(layer_bytes * static_cast<std::size_t>(layout.phases));
@@ -195,22 +243,16 @@ ImpostorAtlas bake_impostor_atlas(const Rig& rig, const GaitStyle& style, const 
   glProgramUniform1f(p, glGetUniformLocation(p, "u_center_z"), -distance);
   const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
   const float far_depth = 1.0f;
-  const SkinnedCrowd& skinned = crowd.skinned[static_cast<std::size_t>(level)];
   for (int k = 0; k < layout.phases; ++k) {
-    walk_to_phase(crowd, static_cast<float>(k) / static_cast<float>(layout.phases), profiler);
-    const SoaTable& t = crowd.table(mesh_slot(level));
-    const float heading = t.f32(kWalkerPlacement, 3)[0];
-    const glm::vec3 ground(t.f32(kWalkerPlacement, 0)[0], t.f32(kWalkerPlacement, 1)[0], t.f32(kWalkerPlacement, 2)[0]);
-    const glm::vec3 center = ground + glm::vec3(0.0f, atlas.center_height_m, 0.0f);
-    const Placement placement{ground, std::cos(heading), std::sin(heading), 1.0f};
+    const PhaseBody& body = bodies[static_cast<std::size_t>(k)];
+    const Placement& placement = body.placement;
+    const glm::vec3 center = placement.position + glm::vec3(0.0f, atlas.center_height_m, 0.0f);
     // This phase's skinned body (world space) as the six attribute streams.
-    const std::size_t n = skinned.vertex_count;
+    const std::size_t n = body.streams[0].size();
     const GLsizeiptr bytes = static_cast<GLsizeiptr>(n * sizeof(float));
     glNamedBufferData(components.id(), 6 * bytes, nullptr, GL_STREAM_DRAW);
-    const float* arrays[6] = {skinned.px.data(), skinned.py.data(), skinned.pz.data(),
-                              skinned.nx.data(), skinned.ny.data(), skinned.nz.data()};
     for (GLuint a = 0; a < 6; ++a) {
-      glNamedBufferSubData(components.id(), a * bytes, bytes, arrays[a]);
+      glNamedBufferSubData(components.id(), a * bytes, bytes, body.streams[a].data());
       glVertexArrayVertexBuffer(vao.id(), a, components.id(), a * bytes, sizeof(float));
     }
     glBindFramebuffer(GL_FRAMEBUFFER, msaa.fbo.id());
@@ -220,14 +262,8 @@ ImpostorAtlas bake_impostor_atlas(const Rig& rig, const GaitStyle& style, const 
     glClearNamedFramebufferfv(msaa.fbo.id(), GL_DEPTH, 0, &far_depth);
     glBindVertexArray(vao.id());
     for (int e = 0; e < layout.elevations; ++e) {
-      const float elevation = layout.elevations > 1 ? glm::radians(layout.max_elevation_deg) * static_cast<float>(e) /
-                                                          static_cast<float>(layout.elevations - 1)
-                                                    : 0.0f;
       for (int a = 0; a < layout.azimuths; ++a) {
-        const float azimuth = 6.28318530718f * static_cast<float>(a) / static_cast<float>(layout.azimuths);
-        const glm::vec3 local(std::sin(azimuth) * std::cos(elevation), std::sin(elevation),
-                              std::cos(azimuth) * std::cos(elevation));
-        const glm::vec3 d = placement.direction(local);
+        const glm::vec3 d = placement.direction(direction(a, e));
         const glm::mat4 view = glm::lookAt(center + distance * d, center, glm::vec3(0.0f, 1.0f, 0.0f));
         // view space -> world (the view's rotation transposed) -> the walker's frame (heading undone).
         const glm::mat3 world_to_local(glm::vec3(placement.cos_heading, 0.0f, placement.sin_heading),

@@ -29,7 +29,7 @@ glm::vec3 grid_position(std::size_t i, std::size_t n, float spacing) {
 }
 
 void reserve(Crowd& crowd, std::size_t more) {
-  SoaTable& t = crowd.table(initial_slot(crowd));
+  SoaTable& t = crowd.table(spawn_slot(crowd));
   t.reserve(t.size() + more);
 }
 
