@@ -117,8 +117,12 @@ void lod_stage(Crowd& crowd, FrameProfile& profile) {
     if (lod.distance[s].size() < t.size()) lod.distance[s].resize(t.capacity());
     if (t.size() == 0) continue;
     if (!decide) {
-      std::fill(decided.begin(), decided.begin() + static_cast<std::ptrdiff_t>(t.size()),
-                static_cast<std::uint8_t>(fixed_slot));
+      // No camera yet. Under auto with impostors every walker stays where it is: a walking crowd spawns as
+      // impostors, and moving 100,000 of them to level 0 to skin them all once (43 GB) before the first camera
+      // arrives is what the tiers are for avoiding. Otherwise the level's table.
+      const std::uint8_t to = level.is_automatic() && impostors ? static_cast<std::uint8_t>(s)
+                                                                : static_cast<std::uint8_t>(fixed_slot);
+      std::fill(decided.begin(), decided.begin() + static_cast<std::ptrdiff_t>(t.size()), to);
       continue;
     }
     // The table a walker is in is its previous decision: hysteresis needs nothing else. Culled (and never seen)
