@@ -67,6 +67,15 @@ long resident_kib() {
   return resident * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
+// The process's high-water resident set (VmHWM), KiB: what the largest crowd needed at its peak.
+long peak_resident_kib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
 using Image = std::vector<std::uint8_t>;  // RGBA8, rows top to bottom
 
 struct ImageError {
@@ -134,11 +143,11 @@ void save(const LodReportOptions& o, const std::string& name, const Image& pixel
 }
 
 // The tiered frame against every walker a level-0 mesh, from `camera` (framed on the crowd when `frame`).
-nlohmann::json quality_shot(const LodReportOptions& o, Renderer& r, const ImpostorAtlas& atlas, OrbitCamera camera,
+nlohmann::json quality_shot(const LodReportOptions& o, Renderer& r, const std::shared_ptr<const ImpostorAtlas>& atlas, OrbitCamera camera,
                             bool frame, const std::string& name) {
   auto tiered = make_crowd(o, o.quality_walkers, DetailLevel::automatic());
   auto reference = make_crowd(o, o.quality_walkers, DetailLevel::mesh(0));
-  tiered->impostor_atlas = std::make_shared<const ImpostorAtlas>(atlas);
+  tiered->impostor_atlas = atlas;
   RenderScratch scratch;
   if (frame) frame_crowd(*tiered, camera, r.aspect(), scratch);
   Profiler profiler(1, false);
@@ -185,10 +194,10 @@ Rect screen_rect(const glm::mat4& view_projection, const glm::vec3& center, floa
 
 // Walkers walking across the impostor threshold under a fixed camera: each crossing's consecutive-frame change in
 // the tiered run against the same two frames of a run where every walker stays a mesh.
-nlohmann::json pop_test(const LodReportOptions& o, Renderer& r, const ImpostorAtlas& atlas) {
+nlohmann::json pop_test(const LodReportOptions& o, Renderer& r, const std::shared_ptr<const ImpostorAtlas>& atlas) {
   auto tiered = make_crowd(o, o.pop_walkers, DetailLevel::automatic());
   auto meshes = make_crowd(o, o.pop_walkers, DetailLevel::automatic());
-  tiered->impostor_atlas = std::make_shared<const ImpostorAtlas>(atlas);
+  tiered->impostor_atlas = atlas;
   meshes->lod.policy.impostor_px = 0.0f;  // never an impostor
   meshes->lod.policy.mesh_budget = 0;
   // A camera at eye height whose impostor distance falls in the middle of the track.
@@ -252,19 +261,64 @@ nlohmann::json pop_test(const LodReportOptions& o, Renderer& r, const ImpostorAt
           {"threshold_m", threshold_m}};
 }
 
+// The switch up close: one walker at the impostor threshold's distance, as its level-2 mesh (left) and as the
+// impostor that replaces it (right), cropped around it and enlarged 4x (nearest), for the README.
+void switch_figure(const LodReportOptions& o, Renderer& r, const std::shared_ptr<const ImpostorAtlas>& atlas) {
+  if (o.images.empty()) return;
+  auto one = [&](DetailLevel level) {
+    LodReportOptions single = o;
+    auto c = make_crowd(single, 1, level);
+    c->impostor_atlas = atlas;
+    return c;
+  };
+  auto mesh = one(DetailLevel::mesh(2));
+  auto impostor = one(DetailLevel::impostor());
+  OrbitCamera camera;
+  const float focal = static_cast<float>(r.height) / (2.0f * std::tan(0.5f * camera.fov_y));
+  camera.distance = focal * mesh->skin.body_height / mesh->lod.policy.impostor_px;
+  camera.pitch = 0.08f;
+  camera.yaw = 0.9f;
+  Profiler profiler(1, false);
+  RenderScratch scratch;
+  Image a, b;
+  for (int f = 0; f < 12; ++f)
+    for (Crowd* c : {mesh.get(), impostor.get()}) step(*c, 1.0f / 30.0f, profiler);
+  const SoaTable& t = mesh->table(DetailSlot::Mesh2);
+  camera.target = glm::vec3(t.f32(kWalkerPlacement, 0)[0], 0.9f, t.f32(kWalkerPlacement, 2)[0]);
+  render(*mesh, r, camera, scratch, &a);
+  render(*impostor, r, camera, scratch, &b);
+  const int h = static_cast<int>(o.scene.walkers > 0 ? 1.3f * mesh->lod.policy.impostor_px : 130.0f);
+  const int w = h * 3 / 4, scale = 4;
+  const int x0 = std::max(0, r.width / 2 - w / 2), y0 = std::max(0, r.height / 2 - h / 2);
+  const int cw = std::min(w, r.width - x0), ch = std::min(h, r.height - y0);
+  Image out(static_cast<std::size_t>(2 * cw * scale) * static_cast<std::size_t>(ch * scale) * 4);
+  for (int y = 0; y < ch * scale; ++y)
+    for (int x = 0; x < 2 * cw * scale; ++x) {
+      const Image& src = x < cw * scale ? a : b;
+      const int sx = x0 + (x % (cw * scale)) / scale, sy = y0 + y / scale;
+      const std::size_t from = (static_cast<std::size_t>(sy) * static_cast<std::size_t>(r.width) + static_cast<std::size_t>(sx)) * 4;
+      const std::size_t to = (static_cast<std::size_t>(y) * static_cast<std::size_t>(2 * cw * scale) + static_cast<std::size_t>(x)) * 4;
+      std::copy_n(src.begin() + static_cast<std::ptrdiff_t>(from), 4, out.begin() + static_cast<std::ptrdiff_t>(to));
+    }
+  save(o, "lod_switch.png", out, 2 * cw * scale, ch * scale);
+}
+
 // Simulate + render `walkers` filling the view, timed.
-nlohmann::json speed_run(const LodReportOptions& o, Renderer& r, const ImpostorAtlas& atlas, std::size_t walkers,
-                         std::size_t frames, bool save_frame) {
+nlohmann::json speed_run(const LodReportOptions& o, Renderer& r, const std::shared_ptr<const ImpostorAtlas>& atlas,
+                         std::size_t walkers, std::size_t frames, bool save_frame) {
   const long before_kib = resident_kib();
   auto crowd = make_crowd(o, walkers, DetailLevel::automatic());
-  crowd->impostor_atlas = std::make_shared<const ImpostorAtlas>(atlas);
+  crowd->impostor_atlas = atlas;
+  // A crowd shot: from just outside the track, a little above the walkers' heads, looking across it, so walkers
+  // fill the view from the nearest (meshes, within the budget) to the far side (impostors). Set before the first
+  // step (the walkers start as impostors), so no step ever skins the whole crowd.
   OrbitCamera camera;
+  camera.target = glm::vec3(0.0f, 1.0f, 0.0f);
   camera.yaw = 0.6f;
-  camera.pitch = 0.45f;
+  camera.pitch = 0.12f;
+  camera.distance = outer_radius(walkers) + 3.0f;
+  camera.far_plane = std::max(camera.far_plane, 3.0f * camera.distance);
   RenderScratch scratch;
-  // Framed before the first step, from the walkers' feet (they start as impostors), so no step ever skins the
-  // whole crowd.
-  frame_crowd(*crowd, camera, r.aspect(), scratch);
   set_crowd_camera(*crowd, camera, r.aspect(), r.height);
   Profiler profiler(1, false);
   for (int f = 0; f < 3; ++f) {  // warm-up: tiers settle, buffers grow
@@ -363,7 +417,9 @@ int run_lod_report(const LodReportOptions& o) {
     ImpostorBakeOptions bake;
     bake.skin_color = r.renderer->options().skin_color;
     bake.muscles = probe->muscles_enabled();
-    const ImpostorAtlas atlas = bake_impostor_atlas(probe->rig(), probe->motion.style, bake);
+    const auto shared_atlas =
+        std::make_shared<const ImpostorAtlas>(bake_impostor_atlas(probe->rig(), probe->motion.style, bake));
+    const ImpostorAtlas& atlas = *shared_atlas;
     std::printf("strata report lod: %dx%d, %d threads, %s\n  atlas: %d phases x %d azimuths x %d elevations, "
                 "%.1f MB, baked in %.2f s\n",
                 o.width, o.height, threads, r.context->renderer().c_str(), atlas.layout.phases,
@@ -398,9 +454,9 @@ int run_lod_report(const LodReportOptions& o) {
     OrbitCamera above;
     above.yaw = 0.6f;
     above.pitch = 0.9f;
-    out["quality"]["eye_height"] = quality_shot(o, r, atlas, eye, false, "eye");
+    out["quality"]["eye_height"] = quality_shot(o, r, shared_atlas, eye, false, "eye");
     if (interrupted()) return interrupted_exit_code();
-    out["quality"]["above"] = quality_shot(o, r, atlas, above, true, "above");
+    out["quality"]["above"] = quality_shot(o, r, shared_atlas, above, true, "above");
     const double psnr = std::min(out["quality"]["eye_height"]["image_psnr_db"].get<double>(),
                                  out["quality"]["above"]["image_psnr_db"].get<double>());
     out["image_psnr_db"] = psnr;
@@ -408,7 +464,8 @@ int run_lod_report(const LodReportOptions& o) {
                                            out["quality"]["above"]["image_mean_abs_error"].get<double>());
     if (interrupted()) return interrupted_exit_code();
 
-    const nlohmann::json pop = pop_test(o, r, atlas);
+    switch_figure(o, r, shared_atlas);
+    const nlohmann::json pop = pop_test(o, r, shared_atlas);
     out["pop"] = pop;
     out["pop_mean_abs_error_max"] = pop["pop_mean_abs_error_max"];
     if (interrupted()) return interrupted_exit_code();
@@ -417,7 +474,7 @@ int run_lod_report(const LodReportOptions& o) {
       const std::size_t n = o.counts[i];
       // Fewer frames for the largest crowds: a few seconds each is enough for a steady mean.
       const std::size_t frames = n >= 100000 ? std::max<std::size_t>(o.frames / 3, 3) : o.frames;
-      const nlohmann::json run = speed_run(o, r, atlas, n, frames, true);
+      const nlohmann::json run = speed_run(o, r, shared_atlas, n, frames, true);
       out["speed"].push_back(run);
       if (n == 1000 || n == 10000 || n == 100000) {
         out["fps_" + std::to_string(n)] = run["fps"];
@@ -425,6 +482,7 @@ int run_lod_report(const LodReportOptions& o) {
       }
       if (interrupted()) return interrupted_exit_code();
     }
+    out["peak_resident_kib"] = peak_resident_kib();
     out["targets"] = {{"image_psnr_db_min", 30.0}, {"impostor_bytes_max", 2048}, {"fps_1000_min", 30.0},
                       {"fps_10000_min", 15.0}, {"fps_100000_min", 2.0}};
     if (!o.json.empty()) write_json_file(o.json, out);

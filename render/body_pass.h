@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <glm/mat4x4.hpp>
@@ -43,6 +44,8 @@ class BodyPass {
 
  private:
   void check_batch(const BodyDrawInput& b, const TopologyBuffer& slot) const;
+  // Reads batch_cache_ (the source's batches, fetched once per call).
+  std::vector<std::optional<std::size_t>> assign_slots(const BodySource& bodies) const;
   void draw_batch(const BodyDrawInput& b, TopologyBuffer& slot, const glm::mat4& view, const glm::mat4& projection,
                   const glm::vec3& skin_color);
 
@@ -58,6 +61,7 @@ class BodyPass {
   std::vector<int> counts_;
   std::vector<const void*> offsets_;
   std::vector<int> base_vertices_;
+  mutable std::vector<BodyBatch> batch_cache_;  // this call's batches (check and draw each fetch them once)
 };
 
 }  // namespace strata

@@ -116,8 +116,12 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
   glBindTextureUnit(0, color_.id());
   glBindTextureUnit(1, normal_.id());
   glBindVertexArray(vao);
+  // Coverage from alpha; the alpha itself is kept out of the target (which stays opaque): written, it left
+  // the edges' pixels translucent, and a PNG writer that un-premultiplies brightened them to white.
   glEnable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
   glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(b.walker_count));
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   glDisable(GL_SAMPLE_ALPHA_TO_COVERAGE);
   glBindTextureUnit(0, 0);
   glBindTextureUnit(1, 0);

@@ -7,6 +7,7 @@ in vec2 v_uv;
 flat in int v_layer;
 in vec3 v_view_position;
 flat in vec3 v_to_eye;
+flat in vec3 v_cell_to_eye;
 flat in float v_heading;
 flat in float v_scale;
 uniform sampler2DArray u_color_atlas;
@@ -28,13 +29,12 @@ void main() {
   vec3 n = normalize(mat3(u_view) * world);
   float depth = (nd.a * 2.0 - 1.0) * u_depth_range * v_scale;
   vec3 surface = v_view_position + v_to_eye * depth;
-  vec3 to_eye = normalize(-surface);
   float diffuse = max(dot(n, kToLight), 0.0);
-  // The rim term fades with coverage: a silhouette texel's normal is perpendicular to a view up to 11 degrees
-  // off the real one (the nearest atlas direction) and stays so over the texel's whole magnified footprint, so the
-  // cubic rim lit a bright outline round every impostor that a mesh's thinner, multisampled silhouette does not
-  // show. Interior texels (coverage 1) keep the full term.
-  float rim = pow(1.0 - clamp(dot(n, to_eye), 0.0, 1.0), 3.0) * c.a * c.a;
+  // The rim term against the direction the cell was baked from, not the real one: the image is the walker seen
+  // from there, and its silhouette normals are perpendicular to that direction. Against the real view, up to 11
+  // degrees away, half the silhouette faced away from the eye and the cubic term drew a white outline round every
+  // impostor that meshes do not have.
+  float rim = pow(1.0 - clamp(dot(n, v_cell_to_eye), 0.0, 1.0), 3.0);
   f_color = vec4(albedo * (0.22 + 0.78 * diffuse) + vec3(0.18 * rim), c.a);
   vec4 clip = u_projection * vec4(surface, 1.0);
   gl_FragDepth = clamp(clip.z / clip.w * 0.5 + 0.5, 0.0, 1.0);

@@ -20,6 +20,7 @@ out vec2 v_uv;                // texture coordinates of the cell's pixel (layer-
 flat out int v_layer;         // the gait phase's layer
 out vec3 v_view_position;     // of the quad point
 flat out vec3 v_to_eye;       // unit, view space, from the walker's centre
+flat out vec3 v_cell_to_eye;  // unit, view space: the direction the chosen cell was baked from
 flat out float v_heading;
 flat out float v_scale;
 const float kTwoPi = 6.28318530718;
@@ -53,6 +54,13 @@ void main() {
   vec4 view_position = u_view * vec4(p_world, 1.0);
   v_view_position = view_position.xyz;
   v_to_eye = normalize(mat3(u_view) * d);
+  // The direction the cell was baked from, in view space: the image shows the walker from there, so the
+  // view-dependent rim term is taken against it (see impostor.frag).
+  float cell_azimuth = kTwoPi * float(a) / float(A);
+  float cell_elevation = E > 1 ? u_max_elevation * float(e) / float(E - 1) : 0.0;
+  vec3 cell_local = vec3(sin(cell_azimuth) * cos(cell_elevation), sin(cell_elevation), cos(cell_azimuth) * cos(cell_elevation));
+  vec3 cell_world = vec3(c * cell_local.x + s * cell_local.z, cell_local.y, -s * cell_local.x + c * cell_local.z);
+  v_cell_to_eye = normalize(mat3(u_view) * cell_world);
   v_heading = a_heading;
   v_scale = a_scale;
   gl_Position = u_projection * view_position;
