@@ -15,14 +15,16 @@ uniform vec3 u_eye;
 uniform ivec4 u_grid;         // phases, azimuths, elevations, unused
 uniform float u_max_elevation;  // radians
 uniform vec3 u_cell;          // cell width, cell height, centre height (m at scale 1)
+uniform float u_depth_range;  // m at scale 1
 layout(std430, binding = 0) readonly buffer CellBounds { vec4 cell_bounds[]; };
 out vec2 v_uv;                // texture coordinates of the cell's pixel (layer-space, 0..1)
 flat out int v_layer;         // the gait phase's layer
 out vec3 v_view_position;     // of the quad point
 flat out vec3 v_to_eye;       // unit, view space, from the walker's centre
 flat out vec3 v_cell_to_eye;  // unit, view space: the direction the chosen cell was baked from
-flat out float v_heading;
-flat out float v_scale;
+flat out mat3 v_local_to_view;
+flat out float v_depth_scale;  // metres of baked depth range at this walker's scale
+flat out float v_ahead;        // how far in front of the walker's centre the quad stands
 const float kTwoPi = 6.28318530718;
 void main() {
   vec2 corner = vec2(gl_VertexID & 1, gl_VertexID >> 1);  // (0,0) (1,0) (0,1) (1,1): a triangle strip
@@ -49,7 +51,14 @@ void main() {
   vec3 up = cross(d, right);
   vec4 b = cell_bounds[(v_layer * E + e) * A + a];
   vec2 in_cell = mix(b.xy, b.zw, corner);
-  vec3 p_world = center + (in_cell.x - 0.5) * u_cell.x * a_scale * right + (in_cell.y - 0.5) * u_cell.y * a_scale * up;
+  // The quad stands in front of the walker, by the atlas's depth range, and shrinks by as much as the move would
+  // enlarge it on screen: every baked depth is then behind the quad, so the fragment shader's depth only ever
+  // grows (depth_greater) and the rasteriser may still reject hidden fragments before shading them.
+  float ahead = min(u_depth_range * a_scale, 0.9 * dist);
+  float shrink = (dist - ahead) / dist;
+  vec3 p_world = center + ahead * d + shrink * ((in_cell.x - 0.5) * u_cell.x * a_scale * right +
+                                                (in_cell.y - 0.5) * u_cell.y * a_scale * up);
+  v_ahead = ahead;
   v_uv = (vec2(a, e) + in_cell) / vec2(A, E);
   vec4 view_position = u_view * vec4(p_world, 1.0);
   v_view_position = view_position.xyz;
@@ -61,7 +70,8 @@ void main() {
   vec3 cell_local = vec3(sin(cell_azimuth) * cos(cell_elevation), sin(cell_elevation), cos(cell_azimuth) * cos(cell_elevation));
   vec3 cell_world = vec3(c * cell_local.x + s * cell_local.z, cell_local.y, -s * cell_local.x + c * cell_local.z);
   v_cell_to_eye = normalize(mat3(u_view) * cell_world);
-  v_heading = a_heading;
-  v_scale = a_scale;
+  // The walker's frame (heading about +Y) to view space, once per walker rather than per fragment.
+  v_local_to_view = mat3(u_view) * mat3(vec3(c, 0.0, -s), vec3(0.0, 1.0, 0.0), vec3(s, 0.0, c));
+  v_depth_scale = u_depth_range * a_scale;
   gl_Position = u_projection * view_position;
 }
