@@ -41,7 +41,7 @@ struct LodPolicy {
   float level1_px = 160.0f;
   float impostor_px = 100.0f;
   float hysteresis = 1.15f;
-  std::uint32_t mesh_budget = 24;
+  std::uint32_t mesh_budget = 8;
 };
 
 // The decision "impostor" in lod_decide and the previous level of a walker that was one.

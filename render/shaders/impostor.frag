@@ -30,7 +30,7 @@ void main() {
   vec3 surface = v_view_position - v_to_eye * max(behind_quad, 0.0);
   float diffuse = max(dot(n, kToLight), 0.0);
   // The rim term against the direction the cell was baked from, not the real one: the image is the walker seen
-  // from there, and its silhouette normals are perpendicular to that direction. Against the real view, up to 11
+  // from there, and its silhouette normals are perpendicular to that direction. Against the real view, up to 6-12
   // degrees away, half the silhouette faced away from the eye and the cubic term drew a white outline round every
   // impostor that meshes do not have.
   float facing = 1.0 - clamp(dot(n, v_cell_to_eye), 0.0, 1.0);
