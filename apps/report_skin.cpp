@@ -4,6 +4,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -18,6 +22,13 @@
 #include "io/hanim_loader.h"
 #include "rig/binding.h"
 #include "rig/body_generator.h"
+#include "rig/body_rig.h"
+#include "rig/cor_centres.h"
+#include "scene/body_settings.h"
+#include "scene/crowd.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
+#include "systems/skin_kernel.h"
 #include "reference/skin_metrics.h"
 #include "reference/fk_reference.h"
 #include "reference/skin_reference.h"
@@ -78,6 +89,125 @@ nlohmann::json quality_json(const Quality& q) {
           {"nan_count", q.nan_count}};
 }
 
+// One skinning mode on level 0 (three-step binding): what the targets read.
+struct ModeQuality {
+  double elbow_volume_change_pct = 0.0, knee_volume_change_pct = 0.0;
+  double twist90_area_ratio = 1.0, twist180_area_ratio = 1.0, twist_section_axial_m = 0.0;
+  double bulge_mm_max = 0.0;
+  std::size_t inverted_triangles_walk = 0;
+  double vertices_per_second = 0.0;
+};
+
+// Level 0 skinned by the kernel on one core, one walker in a walking pose, without muscles: seconds per call,
+// the best of several interleaved rounds per mode (interleaving spreads a shared machine's noise over every
+// mode alike; the best round is the one least disturbed).
+std::array<double, 3> kernel_seconds(const Rig& base) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  Rig rig = base;
+  rig.body = default_bound_body();
+  rig.muscles = nullptr;
+  std::array<std::unique_ptr<Crowd>, 3> scenes;
+  std::array<std::vector<float>, 3> outs;
+  std::array<SkinWalkerJob, 3> jobs;
+  for (std::size_t m = 0; m < 3; ++m) {
+    scenes[m] = std::make_unique<Crowd>(rig);
+    CrowdConfig config;
+    config.walkers = 1;
+    config.motion = MotionSource::Walk;
+    spawn_crowd(*scenes[m], config);
+    set_skinning_mode(*scenes[m], kSkinningModes[m]);
+    set_detail_level(*scenes[m], DetailLevel::mesh(0));
+    Profiler profiler(8, false);
+    for (int f = 0; f < 10; ++f) step(*scenes[m], 1.0f / 30.0f, profiler);
+    const SkinLayout& layout = current_layout(*scenes[m]);
+    const std::size_t padded = pad_to_lanes(layout.vertex_count);
+    outs[m].assign(6 * padded, 0.0f);
+    jobs[m] = make_skin_walker_job(layout, scenes[m]->table(initial_slot(*scenes[m])), 0,
+                                   skin_output_in(outs[m].data(), padded), kSkinningModes[m]);
+    if (!jobs[m].validate()) throw std::runtime_error("report skin: the timing job does not validate");
+  }
+  std::array<double, 3> best{1e30, 1e30, 1e30};
+  for (int round = 0; round < 7; ++round)
+    for (std::size_t m = 0; m < 3; ++m) {
+      const int calls = 200;
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int c = 0; c < calls; ++c) jobs[m].run();
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / calls;
+      best[m] = std::min(best[m], s);
+    }
+  return best;
+}
+
+ModeQuality measure_mode(const Rig& rig, const BodyLevel& level, SkinningMode mode, std::span<const glm::vec3> centres,
+                         const SkinReportOptions& o) {
+  ModeQuality q;
+  const Skeleton& s = rig.skeleton;
+  q.inverted_triangles_walk = measure_walk_skin(rig, level, o.seconds, o.fps, mode, centres).inverted_triangles;
+  const int elbow = s.find_joint("l_elbow"), wrist = s.find_joint("l_wrist");
+  const int knee = s.find_joint("l_knee"), ankle = s.find_joint("l_ankle");
+  if (elbow >= 0) {
+    q.elbow_volume_change_pct =
+        flexion_volume_change_pct(level.mesh, level.binding, s, elbow, 2.0944f, 0.08f, mode, centres);
+    if (wrist >= 0) {
+      q.bulge_mm_max = 1000.0 * flexion_bulge_m(level.mesh, level.binding, s, elbow, wrist, 2.0944f, 0.08f, mode, centres);
+      const TwistSection t90 = twist_section(level.mesh, level.binding, s, elbow, wrist, 1.5708f, mode, centres);
+      const TwistSection t180 = twist_section(level.mesh, level.binding, s, elbow, wrist, 3.14159f, mode, centres);
+      q.twist90_area_ratio = t90.area_ratio;
+      q.twist180_area_ratio = t180.area_ratio;
+      q.twist_section_axial_m = t180.axial_m;
+    }
+  }
+  if (knee >= 0) {
+    q.knee_volume_change_pct =
+        flexion_volume_change_pct(level.mesh, level.binding, s, knee, 2.0944f, 0.11f, mode, centres);
+    if (ankle >= 0)
+      q.bulge_mm_max = std::max(
+          q.bulge_mm_max, 1000.0 * flexion_bulge_m(level.mesh, level.binding, s, knee, ankle, 2.0944f, 0.11f, mode, centres));
+  }
+  return q;
+}
+
+// The `modes` object: linear blending, dual quaternions and centres of rotation side by side on level 0.
+nlohmann::json modes_report(const Rig& rig, const BodyLevel& level, const SkinReportOptions& o, bool& targets) {
+  const CorCentres cor = compute_cor_centres(level.mesh, level.binding);  // uncached: its time is reported
+  const std::array<double, 3> seconds = kernel_seconds(rig);
+  nlohmann::json modes;
+  std::printf("\n%-5s %10s %9s %9s %9s %10s %9s %13s %9s\n", "mode", "elbow vol%", "knee vol%", "twist 90",
+              "twist 180", "bulge mm", "inverted", "M vertices/s", "cost/lbs");
+  for (std::size_t m = 0; m < 3; ++m) {
+    const SkinningMode mode = kSkinningModes[m];
+    ModeQuality q = measure_mode(rig, level, mode, cor.centres, o);
+    q.vertices_per_second = seconds[m] > 0.0 ? double(level.mesh.vertex_count()) / seconds[m] : 0.0;
+    const double cost = seconds[0] > 0.0 ? seconds[m] / seconds[0] : 0.0;
+    const bool ok = mode == SkinningMode::Linear ||
+                    (std::abs(q.elbow_volume_change_pct) <= 5.0 && std::abs(q.knee_volume_change_pct) <= 5.0 &&
+                     q.twist180_area_ratio >= 0.9 && q.inverted_triangles_walk == 0 && cost <= 1.3);
+    targets = targets && ok;
+    modes[skinning_mode_name(mode)] = {{"elbow_volume_change_pct", q.elbow_volume_change_pct},
+                                       {"knee_volume_change_pct", q.knee_volume_change_pct},
+                                       {"twist90_area_ratio", q.twist90_area_ratio},
+                                       {"twist180_area_ratio", q.twist180_area_ratio},
+                                       {"twist_section_axial_m", q.twist_section_axial_m},
+                                       {"bulge_mm_max", q.bulge_mm_max},
+                                       {"inverted_triangles_walk", q.inverted_triangles_walk},
+                                       {"vertices_per_second", q.vertices_per_second},
+                                       {"cost_vs_lbs", cost},
+                                       {"targets_met", ok}};
+    std::printf("%-5s %10.1f %9.1f %9.2f %9.2f %10.1f %9zu %13.0f %9.2f%s\n", skinning_mode_name(mode),
+                q.elbow_volume_change_pct, q.knee_volume_change_pct, q.twist90_area_ratio, q.twist180_area_ratio,
+                q.bulge_mm_max, q.inverted_triangles_walk, q.vertices_per_second / 1e6, cost, ok ? "" : "  MISSED");
+  }
+  modes["level"] = 0;
+  modes["kernel_isa"] = skin_kernel_isa_name(skin_kernel_isa());
+  modes["cor_precompute_seconds"] = cor.seconds;
+  modes["cor_vertices_solved"] = cor.solved;
+  modes["cor_vertices_fallback"] = cor.fallback;
+  std::printf("centres of rotation: %zu vertices, %zu kept at rest (no similar triangle), %.2f s to precompute; "
+              "kernel %s, one core\n",
+              cor.solved, cor.fallback, cor.seconds, skin_kernel_isa_name(skin_kernel_isa()));
+  return modes;
+}
+
 int run_skin_report(const SkinReportOptions& o) {
   if (!check_outputs("report skin", {{"--json", o.json}})) return kExitFailure;
   try {
@@ -130,6 +260,11 @@ int run_skin_report(const SkinReportOptions& o) {
       level_reports.push_back(j);
     }
     out["levels"] = level_reports;
+    {
+      const Mesh& mesh0 = levels.levels[0];
+      const BodyLevel level0{mesh0, bind_three_step(mesh0, rig.skeleton, default_binding_tables())};
+      out["modes"] = modes_report(rig, level0, o, targets);
+    }
     out["cage"] = {{"vertices", levels.cage.vertex_count()}, {"triangles", levels.cage.triangle_count()}};
     out["walk_seconds"] = o.seconds;
     out["flexion_deg"] = 120;
