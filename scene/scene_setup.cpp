@@ -139,6 +139,7 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
     throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");
   }
   spawn_crowd(*scene, config);
+  set_skinning_mode(*scene, o.skinning);  // before the level, so the layouts are built once, with their centres
   set_detail_level(*scene, o.level);
   if (o.level.is_mesh() && scene->rig().body && static_cast<std::size_t>(o.level.index()) >= scene->rig().body->levels.size())
     throw std::invalid_argument("--level " + o.level.name() + ": the body has " +
