@@ -33,7 +33,6 @@ template <int K, bool Muscle>
   const float* __restrict nx = L.nx.data() + first;
   const float* __restrict ny = L.ny.data() + first;
   const float* __restrict nz = L.nz.data() + first;
-  const float* __restrict w0 = L.weight[0].data() + first;
   const float* __restrict w1 = L.weight[1].data() + first;
   const float* __restrict w2 = L.weight[2].data() + first;
   const float* __restrict w3 = L.weight[3].data() + first;
@@ -44,9 +43,12 @@ template <int K, bool Muscle>
   const float* __restrict c1 = L.muscle_coefficient[1].data() + first;
   const float* __restrict c2 = L.muscle_coefficient[2].data() + first;
   // A local copy: the compiler cannot prove the outputs never alias `m`, and would reload it every vertex.
+  // Weights sum to 1 (the layout renormalised them), so sum_k w_k M_k = M_0 + sum_{k>0} w_k (M_k - M_0): one
+  // multiply-add per influence beyond the first instead of a multiply per influence, and w_0 is never read (4
+  // bytes a vertex less to stream). The implicit w_0 differs from the stored one by float rounding (1e-7).
   float M[K][12];
   for (int k = 0; k < K; ++k)
-    for (int c = 0; c < 12; ++c) M[k][c] = m[k][c];
+    for (int c = 0; c < 12; ++c) M[k][c] = k == 0 ? m[0][c] : m[k][c] - m[0][c];
   // Outputs offset once and a 64-bit index: with `first + i` in 32 bits the addresses may wrap, which GCC
   // cannot vectorise.
   ox += first, oy += first, oz += first, onx += first, ony += first, onz += first;
@@ -54,13 +56,12 @@ template <int K, bool Muscle>
   for (std::size_t i = 0; i < n; ++i) {
     // Twelve named scalars rather than a float[12]: GCC keeps an array local in memory and then refuses to
     // vectorise the vertex loop ("no vectype"); scalars it vectorises.
-    const float v0 = w0[i];
     float v1 = 0.0f, v2 = 0.0f, v3 = 0.0f;
     if constexpr (K > 1) v1 = w1[i];
     if constexpr (K > 2) v2 = w2[i];
     if constexpr (K > 3) v3 = w3[i];
     auto blend = [&](int c) {
-      float r = v0 * M[0][c];
+      float r = M[0][c];
       if constexpr (K > 1) r += v1 * M[1][c];
       if constexpr (K > 2) r += v2 * M[2][c];
       if constexpr (K > 3) r += v3 * M[3][c];
@@ -127,7 +128,6 @@ template <int K, bool Muscle>
   const float* __restrict nx = L.nx.data() + first;
   const float* __restrict ny = L.ny.data() + first;
   const float* __restrict nz = L.nz.data() + first;
-  const float* __restrict w0 = L.weight[0].data() + first;
   const float* __restrict w1 = L.weight[1].data() + first;
   const float* __restrict w2 = L.weight[2].data() + first;
   const float* __restrict w3 = L.weight[3].data() + first;
@@ -137,19 +137,18 @@ template <int K, bool Muscle>
   const float* __restrict c0 = L.muscle_coefficient[0].data() + first;
   const float* __restrict c1 = L.muscle_coefficient[1].data() + first;
   const float* __restrict c2 = L.muscle_coefficient[2].data() + first;
-  float D[K][8];
+  float D[K][8];  // differences from the first, as in skin_group
   for (int k = 0; k < K; ++k)
-    for (int c = 0; c < 8; ++c) D[k][c] = d[k][c];
+    for (int c = 0; c < 8; ++c) D[k][c] = k == 0 ? d[0][c] : d[k][c] - d[0][c];
   ox += first, oy += first, oz += first, onx += first, ony += first, onz += first;
   const std::size_t n = count;
   for (std::size_t i = 0; i < n; ++i) {
-    const float v0 = w0[i];
     float v1 = 0.0f, v2 = 0.0f, v3 = 0.0f;
     if constexpr (K > 1) v1 = w1[i];
     if constexpr (K > 2) v2 = w2[i];
     if constexpr (K > 3) v3 = w3[i];
     auto blend = [&](int c) {
-      float r = v0 * D[0][c];
+      float r = D[0][c];
       if constexpr (K > 1) r += v1 * D[1][c];
       if constexpr (K > 2) r += v2 * D[2][c];
       if constexpr (K > 3) r += v3 * D[3][c];
@@ -203,7 +202,6 @@ template <int K, bool Muscle>
   const float* __restrict cxs = L.cx.data() + first;
   const float* __restrict cys = L.cy.data() + first;
   const float* __restrict czs = L.cz.data() + first;
-  const float* __restrict w0 = L.weight[0].data() + first;
   const float* __restrict w1 = L.weight[1].data() + first;
   const float* __restrict w2 = L.weight[2].data() + first;
   const float* __restrict w3 = L.weight[3].data() + first;
@@ -213,28 +211,27 @@ template <int K, bool Muscle>
   const float* __restrict c0 = L.muscle_coefficient[0].data() + first;
   const float* __restrict c1 = L.muscle_coefficient[1].data() + first;
   const float* __restrict c2 = L.muscle_coefficient[2].data() + first;
-  float M[K][12], Q[K][4];
+  float M[K][12], Q[K][4];  // differences from the first, as in skin_group
   for (int k = 0; k < K; ++k) {
-    for (int c = 0; c < 12; ++c) M[k][c] = m[k][c];
-    for (int c = 0; c < 4; ++c) Q[k][c] = d[k][c];
+    for (int c = 0; c < 12; ++c) M[k][c] = k == 0 ? m[0][c] : m[k][c] - m[0][c];
+    for (int c = 0; c < 4; ++c) Q[k][c] = k == 0 ? d[0][c] : d[k][c] - d[0][c];
   }
   ox += first, oy += first, oz += first, onx += first, ony += first, onz += first;
   const std::size_t n = count;
   for (std::size_t i = 0; i < n; ++i) {
-    const float v0 = w0[i];
     float v1 = 0.0f, v2 = 0.0f, v3 = 0.0f;
     if constexpr (K > 1) v1 = w1[i];
     if constexpr (K > 2) v2 = w2[i];
     if constexpr (K > 3) v3 = w3[i];
     auto blend = [&](int c) {
-      float r = v0 * M[0][c];
+      float r = M[0][c];
       if constexpr (K > 1) r += v1 * M[1][c];
       if constexpr (K > 2) r += v2 * M[2][c];
       if constexpr (K > 3) r += v3 * M[3][c];
       return r;
     };
     auto qblend = [&](int c) {
-      float r = v0 * Q[0][c];
+      float r = Q[0][c];
       if constexpr (K > 1) r += v1 * Q[1][c];
       if constexpr (K > 2) r += v2 * Q[2][c];
       if constexpr (K > 3) r += v3 * Q[3][c];
