@@ -29,6 +29,13 @@
 #include "scene/spawn.h"
 #include "scene/step.h"
 #include "systems/skin_kernel.h"
+#include "io/image_writer.h"
+#include "render/camera.h"
+#include "render/crowd_renderer.h"
+#include "render/gl_context.h"
+#include "scene/scene_setup.h"
+#include "systems/fk.h"
+#include "systems/pose_gather.h"
 #include "reference/skin_metrics.h"
 #include "reference/fk_reference.h"
 #include "reference/skin_reference.h"
@@ -38,6 +45,7 @@ namespace {
 
 struct SkinReportOptions {
   std::string json;
+  std::string images;  // directory for the modes figure; empty = none
   float seconds = 2.5f;  // of walking: two gait cycles at the default cadence
   float fps = 60.0f;
   bool automatic = true;
@@ -212,8 +220,78 @@ nlohmann::json modes_report(const Rig& rig, const BodyLevel& level, const SkinRe
   return modes;
 }
 
+// The modes figure: one column per mode (lbs, dqs, cor); top row the left elbow flexed 120 deg, bottom row the
+// left forearm turned 180 deg about its own axis at the elbow; the arm raised 75 deg forward so both face the
+// camera. Level 0, no muscle layer (its bulge would mix into the comparison).
+void write_modes_figure(const std::filesystem::path& dir) {
+  constexpr int kPanel = 400;
+  constexpr float kDeg = 3.14159265f / 180.0f;
+  auto context = create_headless_gl_context();
+  CrowdRenderer renderer(kPanel, kPanel);
+  renderer.options().draw_skeleton = false;
+  renderer.options().draw_ground = false;
+  std::vector<std::uint8_t> image(std::size_t(3) * kPanel * 2 * kPanel * 4), pixels;
+  for (std::size_t m = 0; m < 3; ++m) {
+    SceneOptions so;
+    so.walkers = 1;
+    so.rest = true;
+    so.motion = "clip";
+    so.muscles = "none";
+    so.level = DetailLevel::mesh(0);
+    so.skinning = kSkinningModes[m];
+    std::unique_ptr<Crowd> scene = build_scene(so);
+    const Skeleton& s = scene->rig().skeleton;
+    const int shoulder = s.find_joint("l_shoulder"), elbow = s.find_joint("l_elbow"), wrist = s.find_joint("l_wrist");
+    if (shoulder < 0 || elbow < 0 || wrist < 0) throw std::runtime_error("report skin: the default rig has no left arm");
+    const WalkerLanes l = scene->lanes();
+    const float placement[5] = {0.0f, 0.0f, 0.0f, 0.0f, 1.0f};
+    for (int c = 0; c < 5; ++c) l.at(l.placement, c)[0] = placement[c];
+    const glm::vec3 axis = glm::normalize(s.centers[static_cast<std::size_t>(wrist)] - s.centers[static_cast<std::size_t>(elbow)]);
+    for (int row = 0; row < 2; ++row) {
+      for (std::uint32_t j = 0; j < l.joints; ++j)
+        for (int c = 0; c < 4; ++c) l.at(l.local_rotation, j * 4 + c)[0] = c == 3 ? 1.0f : 0.0f;
+      auto set = [&](int joint, const glm::quat& q) {
+        const float v[4] = {q.x, q.y, q.z, q.w};
+        for (int c = 0; c < 4; ++c) l.at(l.local_rotation, std::size_t(joint) * 4 + c)[0] = v[c];
+      };
+      set(shoulder, glm::angleAxis(-75.0f * kDeg, glm::vec3(1, 0, 0)));
+      set(elbow, row == 0 ? glm::angleAxis(-120.0f * kDeg, glm::vec3(1, 0, 0)) : glm::angleAxis(180.0f * kDeg, axis));
+      run_or_throw(make_fk_job(s, scene->table(initial_slot(*scene))), "fk");
+      SkinnedCrowd out;
+      run_or_throw(make_skin_job(current_layout(*scene), scene->table(initial_slot(*scene)), out, nullptr,
+                                 scene->skin.mode),
+                   "skin");
+      OrbitCamera camera;
+      camera.yaw = 1.75f;  // from the walker's left, a little behind, looking down on the raised arm
+      camera.pitch = 0.5f;
+      // Top: the bent arm, shoulder to fist; bottom: the straight arm out to the hand.
+      if (row == 0)
+        camera.frame_box_tight(glm::vec3(0.12f, 1.30f, -0.10f), glm::vec3(0.30f, 1.70f, 0.35f), 1.0f, 1.05f);
+      else
+        camera.frame_box_tight(glm::vec3(0.10f, 1.15f, -0.10f), glm::vec3(0.30f, 1.65f, 0.75f), 1.0f, 1.05f);
+      BodyDrawInput bodies;
+      bodies.triangles = current_layout(*scene).triangles;
+      bodies.px = out.px.data(), bodies.py = out.py.data(), bodies.pz = out.pz.data();
+      bodies.nx = out.nx.data(), bodies.ny = out.ny.data(), bodies.nz = out.nz.data();
+      bodies.stride = out.stride;
+      bodies.vertex_count = out.vertex_count;
+      bodies.walker_count = 1;
+      std::vector<glm::vec3> joints;
+      gather_joint_positions(scene->lanes(), joints);
+      SkeletonDrawInput input{&s, joints, 1};
+      renderer.render(input, camera.view(), camera.projection(1.0f), &bodies);
+      renderer.read_rgba(pixels);
+      for (int y = 0; y < kPanel; ++y)
+        std::copy_n(pixels.begin() + std::ptrdiff_t(y) * kPanel * 4, kPanel * 4,
+                    image.begin() + ((std::ptrdiff_t(row) * kPanel + y) * 3 * kPanel + std::ptrdiff_t(m) * kPanel) * 4);
+    }
+  }
+  std::filesystem::create_directories(dir);
+  write_image(dir / "skin_modes.png", 3 * kPanel, 2 * kPanel, 4, image);
+}
+
 int run_skin_report(const SkinReportOptions& o) {
-  if (!check_outputs("report skin", {{"--json", o.json}})) return kExitFailure;
+  if (!check_outputs("report skin", {{"--json", o.json}, {"--images", o.images, true}})) return kExitFailure;
   try {
     const Rig rig = to_rig(load_default_humanoid());
     const BodyLevels& levels = default_body();
@@ -273,6 +351,7 @@ int run_skin_report(const SkinReportOptions& o) {
     out["walk_seconds"] = o.seconds;
     out["flexion_deg"] = 120;
     out["targets_met"] = targets;
+    if (!o.images.empty()) write_modes_figure(o.images);
     if (!o.json.empty()) write_json_file(o.json, out);
     std::printf("cage: %zu vertices, %zu triangles; targets %s\n", levels.cage.vertex_count(),
                 levels.cage.triangle_count(), targets ? "met" : "MISSED");
@@ -289,6 +368,8 @@ void add_skin_report(CLI::App& report, int& exit_code) {
   auto o = std::make_shared<SkinReportOptions>();
   auto* skin = report.add_subcommand("skin", "Measure the default body's levels, binding and skinning quality");
   skin->add_option("--json", o->json, "Write the report here");
+  skin->add_option("--images", o->images,
+                   "Write skin_modes.png here: the elbow at 120 deg and the forearm twisted 180 deg per skinning mode");
   skin->add_option("--seconds", o->seconds, "Seconds of walking measured")->capture_default_str()->check(positive_up_to(3600));
   skin->add_flag("!--no-automatic", o->automatic, "Skip the automatic (bone heat) binding comparison");
   skin->callback([o, &exit_code] { exit_code = run_skin_report(*o); });
