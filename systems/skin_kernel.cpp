@@ -354,7 +354,8 @@ void skin_groups_portable(const SkinLayout& L, const WalkerPose& p, float* ox, f
 
 // The unit quaternion (x, y, z, w) of a rotation matrix given as three columns (Shepperd's method: take the
 // largest of the four diagonal combinations as the pivot, so no square root of a near-zero sum). A matrix that
-// is not a rotation (a zero skinning matrix) yields the identity rather than NaN.
+// is not a rotation (a zero skinning matrix) yields the identity rather than NaN. (This file is built with fast
+// math, so the isfinite below may fold away: the length test is what guards the zero case.)
 void quaternion_of(const float* c0, const float* c1, const float* c2, float q[4]) {
   const float m00 = c0[0], m10 = c0[1], m20 = c0[2], m01 = c1[0], m11 = c1[1], m21 = c1[2];
   const float m02 = c2[0], m12 = c2[1], m22 = c2[2];
