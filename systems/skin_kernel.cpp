@@ -23,10 +23,10 @@ struct MuscleInput {
 // d = c0 f[p0] + c1 f[p1] + c2 f[p2] (three gathers from the walker's few hundred bytes of force factors, which
 // stay in L1), fused here so positions are written once; a separate displacement pass would read and write the
 // whole output again.
-template <int K, bool Muscle>
+template <int K, bool Muscle, bool Rigid = false>
 [[gnu::always_inline]] inline void skin_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count, const float (*m)[12],
                 const float* __restrict force, float* __restrict ox, float* __restrict oy, float* __restrict oz,
-                float* __restrict onx, float* __restrict ony, float* __restrict onz) {
+                float* __restrict onx, float* __restrict ony, float* __restrict onz, float normal_scale = 1.0f) {
   const float* __restrict px = L.px.data() + first;
   const float* __restrict py = L.py.data() + first;
   const float* __restrict pz = L.pz.data() + first;
@@ -73,7 +73,13 @@ template <int K, bool Muscle>
     const float qx = b0 * a + b3 * c + b6 * d;
     const float qy = b1 * a + b4 * c + b7 * d;
     const float qz = b2 * a + b5 * c + b8 * d;
-    const float inv = 1.0f / std::sqrt(qx * qx + qy * qy + qz * qz + 1e-30f);
+    // Rigid (one joint whose matrix is a rotation times the walker's scale): the normal's length is that scale,
+    // known per group, so a multiply replaces the per-vertex reciprocal square root.
+    float inv;
+    if constexpr (Rigid)
+      inv = normal_scale;
+    else
+      inv = 1.0f / std::sqrt(qx * qx + qy * qy + qz * qz + 1e-30f);
     const float ux = qx * inv, uy = qy * inv, uz = qz * inv;
     onx[i] = ux;
     ony[i] = uy;
@@ -275,6 +281,9 @@ struct WalkerPose {
   float scale = 1.0f;
   SkinningMode mode = SkinningMode::Linear;
   const float* force = nullptr;  // null: no muscle displacement
+  // Per joint: 1 / the common length of its world 3x3's columns when they are orthogonal and of equal length (a
+  // rotation times the walker's scale), else 0 (the normal is then renormalised per vertex).
+  const float* normal_scale = nullptr;
 };
 
 template <bool Muscle>
@@ -284,8 +293,14 @@ template <bool Muscle>
   const float* force = p.force;
   // One influence is a rigid transform whatever the mode: the linear body is exact and the cheapest.
   if (g.influences <= 1 || p.mode == SkinningMode::Linear) {
+    const float ns = p.normal_scale[g.joints[0]];
     switch (g.influences) {
-      case 1: skin_group<1, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz); break;
+      case 1:
+        if (ns > 0.0f)
+          skin_group<1, Muscle, true>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz, ns);
+        else
+          skin_group<1, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz);
+        break;
       case 2: skin_group<2, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz); break;
       case 3: skin_group<3, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz); break;
       default: skin_group<4, Muscle>(L, g.first, g.count, m, force, ox, oy, oz, onx, ony, onz); break;
@@ -460,8 +475,23 @@ void skin_walker(const SkinLayout& layout, const ColumnView<const float>& skinni
   const bool muscles = layout.muscle_points > 0 && points > 0;
   if (muscles)
     for (std::uint32_t p = 0; p < points; ++p) force[p] = P.scale * muscle_force.at(p, w);
+  float normal_scale[kMaxJointsPerRig];
+  for (std::size_t j = 0; j < joints; ++j) {
+    const float* c = world[j];
+    const float l0 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2], l1 = c[3] * c[3] + c[4] * c[4] + c[5] * c[5];
+    const float l2 = c[6] * c[6] + c[7] * c[7] + c[8] * c[8];
+    const float d01 = c[0] * c[3] + c[1] * c[4] + c[2] * c[5], d02 = c[0] * c[6] + c[1] * c[7] + c[2] * c[8];
+    const float d12 = c[3] * c[6] + c[4] * c[7] + c[5] * c[8];
+    // 1e-5 of the squared length: FK's float noise is far below it, a sheared or non-uniformly scaled joint far
+    // above; the normal's length then errs by at most ~5e-6 against renormalising.
+    const float tol = 1e-5f * l0;
+    const bool similar = l0 > 1e-30f && l0 < 1e30f && std::abs(l1 - l0) <= tol && std::abs(l2 - l0) <= tol &&
+                         std::abs(d01) <= tol && std::abs(d02) <= tol && std::abs(d12) <= tol;
+    normal_scale[j] = similar ? 1.0f / std::sqrt(l0) : 0.0f;
+  }
   WalkerPose pose;
   pose.world = world;
+  pose.normal_scale = normal_scale;
   pose.force = muscles ? force : nullptr;
   pose.mode = mode;
   pose.scale = P.scale;
