@@ -102,6 +102,9 @@ int run_soak(const SoakOptions& o) {
     double next_sample = 0.0;
     std::size_t frames = 0;
     ProgressLine progress("s", o.progress);
+    // A walking crowd under --level auto starts as impostors: framed from their feet before the first step.
+    if (scene->table(DetailSlot::Impostor).size() > 0 && frame_crowd(*scene, camera, aspect, scratch))
+      set_crowd_camera(*scene, camera, aspect, o.height);
     for (;;) {
       const double t = std::chrono::duration<double>(clock::now() - start).count();
       if (t >= next_sample) {

@@ -18,5 +18,6 @@ void add_export_command(CLI::App& app, int& exit_code);   // `strata export`, ap
 void add_skin_report(CLI::App& report, int& exit_code);    // `strata report skin`, apps/report_skin.cpp
 void add_muscle_report(CLI::App& report, int& exit_code);  // `strata report muscle`, apps/report_muscle.cpp
 void add_subdiv_report(CLI::App& report, int& exit_code);  // `strata report subdiv`, apps/report_subdiv.cpp
+void add_lod_report(CLI::App& report, int& exit_code);     // `strata report lod`, apps/report_lod.cpp
 
 }  // namespace strata::cli

@@ -53,7 +53,15 @@ std::uint64_t estimate_crowd_bytes(const SceneOptions& o) {
   // Skinned storage: position and normal, 6 floats per vertex. Joint state: world and skinning matrices, local
   // rotations and the IK and gait columns, about 50 floats for each of the 25 joints.
   constexpr std::uint64_t kJointBytes = 25 * 50 * sizeof(float);
-  return static_cast<std::uint64_t>(o.walkers) * (vertices * 6 * sizeof(float) + kJointBytes);
+  const std::uint64_t walkers = o.walkers;
+  const bool walking = o.motion.empty() || o.motion == "walk";
+  if (o.level.is_impostor()) return walkers * kJointBytes;  // no skinned storage; culled walkers keep wide rows
+  if (o.level.is_automatic() && walking && o.mesh_budget > 0 && vertices > 0) {
+    // At most mesh_budget walkers are skinned (at level 0 at worst); the others are impostors or culled.
+    const std::uint64_t meshes = std::min<std::uint64_t>(walkers, o.mesh_budget);
+    return meshes * kMeshVertices[0] * 6 * sizeof(float) + walkers * kJointBytes;
+  }
+  return walkers * (vertices * 6 * sizeof(float) + kJointBytes);
 }
 
 std::string check_crowd_memory(const SceneOptions& o) {
@@ -100,15 +108,24 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   const CLI::Validator body_level(
       [](std::string& value) -> std::string {
         if (DetailLevel::parse(value)) return {};
-        return "must be 0, 1, 2, auto, S1, S2, S3 or -1, got '" + value + "'";
+        return "must be 0, 1, 2, auto, impostor, S1, S2, S3 or -1, got '" + value + "'";
       },
-      "0|1|2|auto|S1|S2|S3|-1");
+      "0|1|2|auto|impostor|S1|S2|S3|-1");
   cmd.add_option_function<std::string>(
          "--level", [&o](const std::string& value) { o.level = *DetailLevel::parse(value); },
          "Body resolution level: 0 (17,953 vertices), 1 (8,923), 2 (5,133); auto: each walker by its height "
-         "on screen (with hysteresis); S1, S2, S3: the 1,800-vertex cage skinned and Loop-subdivided 1-3 "
-         "times every frame (7,194 / 28,770 / 115,074 vertices); -1 for skeletons only")
+         "on screen (with hysteresis): levels 0-2, then impostors (walking crowds), the nearest --mesh-budget "
+         "as meshes; impostor: every walker an impostor; S1, S2, S3: the 1,800-vertex cage skinned and "
+         "Loop-subdivided 1-3 times every frame (7,194 / 28,770 / 115,074 vertices); -1 for skeletons only")
       ->check(body_level)->default_str(o.level.name());
+  cmd.add_option("--mesh-budget", o.mesh_budget,
+                 "Under --level auto, the most walkers drawn as meshes in a frame (the nearest); the rest of the "
+                 "visible walkers are impostors. 0 = no cap")
+      ->capture_default_str()->check(whole_in(0, 10000000));
+  cmd.add_option("--impostor-px", o.impostor_px,
+                 "Under --level auto, walkers shorter than this many pixels on screen are drawn as impostors "
+                 "(0 = none)")
+      ->capture_default_str()->check(finite_in(0, 100000));
   const CLI::Validator skinning_mode(
       [](std::string& value) -> std::string {
         if (parse_skinning_mode(value)) return {};

@@ -32,6 +32,22 @@ std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t join
   return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
 }
 
+std::unique_ptr<SoaTable> make_light_walker_table(std::string name) {
+  // The full table of a one-joint rig without muscles has width 4 rotations and 12 floats per matrix; narrowed to
+  // one column each, which no full table of any rig has (a rig has joints, so rotations are >= 4 wide).
+  std::unique_ptr<SoaTable> full = make_walker_table("", 1, 0);
+  std::vector<FieldDesc> fields = full->fields();
+  for (const std::uint32_t f : {kWalkerLocalRotation, kWalkerWorld, kWalkerSkinning, kWalkerIkGoal, kWalkerIkResult,
+                                kWalkerIkMode, kWalkerIkFlags, kWalkerFootLock, kWalkerMusclePoint, kWalkerMuscleFrame,
+                                kWalkerMuscleLength, kWalkerMuscleForce})
+    fields[f].width = 1;
+  return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
+}
+
+bool is_light_walker_table(const SoaTable& table) {
+  return table.fields().size() == kWalkerFieldCount && table.fields()[kWalkerLocalRotation].width == 1;
+}
+
 WalkerLanes walker_lanes(SoaTable& table, std::uint32_t joint_count) {
   if (table.fields().size() != kWalkerFieldCount || table.fields()[kWalkerLocalRotation].width != joint_count * 4)
     throw std::invalid_argument("walker_lanes: table '" + table.name() + "' is not a walker table for " +

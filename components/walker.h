@@ -93,6 +93,13 @@ enum WalkerField : std::uint32_t {
 std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count,
                                             std::uint32_t muscle_points = 0);
 
+// A walker table with the same fields, of which only those a walker moving on without a pose needs have their
+// width: placement, clock, clip, root translation, gait and path. Every other field is one unused column (a field
+// cannot be empty). The impostors' table (scene/crowd.h): ~270 bytes a walker instead of a few kilobytes.
+std::unique_ptr<SoaTable> make_light_walker_table(std::string name);
+// True when `table` was made by make_light_walker_table (its pose fields are one column wide).
+bool is_light_walker_table(const SoaTable& table);
+
 // Raw pointers into a walker table: component c of a field starts at base + c * stride. Valid until the table
 // grows or shrinks. Kept for the readers not yet converted to job structs over ColumnViews (lod, gait metrics,
 // pose gathering, the scalar references, tests); the converted systems take views (systems/job.h).

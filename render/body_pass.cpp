@@ -2,6 +2,8 @@
 
 #include <epoxy/gl.h>
 
+#include <array>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <variant>
@@ -39,12 +41,49 @@ BodyPass::BodyPass()
   glVertexArrayAttribBinding(vao, 7, 7);
 }
 
+// The topology slot each CPU-skinned batch of a frame draws from: the slot already holding its triangles when one
+// does, else a slot holding none of this frame's. A level keeps its slot while the set of levels drawn changes
+// (under --level auto, levels come and go as walkers cross thresholds), where numbering the batches in order made
+// level 2 take level 1's slot whenever level 1 was empty, re-uploading and re-optimising both lists every such
+// frame. Impostor batches take no slot (std::nullopt below).
+std::vector<std::optional<std::size_t>> BodyPass::assign_slots(const BodySource& bodies) const {
+  const std::size_t n = bodies.batch_count();
+  std::vector<std::optional<std::size_t>> slot(n);
+  std::array<bool, kMaxBatches> taken{};
+  std::vector<const BodyDrawInput*> skinned(n, nullptr);
+  std::size_t count = 0;
+  for (std::size_t k = 0; k < n; ++k)
+    if (const BodyDrawInput* b = std::get_if<BodyDrawInput>(&batch_cache_[k])) skinned[k] = b, ++count;
+  if (count > kMaxBatches)
+    throw std::invalid_argument("crowd renderer: at most " + std::to_string(kMaxBatches) + " body levels per frame");
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!skinned[k]) continue;
+    for (std::size_t s = 0; s < kMaxBatches; ++s)
+      if (!taken[s] && slots_[s].holds(skinned[k]->triangles, skinned[k]->vertex_count)) {
+        slot[k] = s, taken[s] = true;
+        break;
+      }
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!skinned[k] || slot[k]) continue;
+    for (std::size_t s = 0; s < kMaxBatches; ++s)
+      if (!taken[s]) {
+        slot[k] = s, taken[s] = true;
+        break;
+      }
+  }
+  return slot;
+}
+
 void BodyPass::check(const BodySource& bodies) const {
   const std::size_t n = bodies.batch_count();
-  if (n > kMaxBatches)
-    throw std::invalid_argument("crowd renderer: at most " + std::to_string(kMaxBatches) + " body levels per frame");
+  batch_cache_.clear();
+  for (std::size_t k = 0; k < n; ++k) batch_cache_.push_back(bodies.batch(k));
+  const std::vector<std::optional<std::size_t>> slot = assign_slots(bodies);
   for (std::size_t k = 0; k < n; ++k)
-    std::visit(Overloads{[&](const BodyDrawInput& b) { check_batch(b, slots_[k]); }}, bodies.batch(k));
+    std::visit(Overloads{[&](const BodyDrawInput& b) { check_batch(b, slots_[*slot[k]]); },
+                         [&](const ImpostorBatch& b) { ImpostorPass::check(b); }},
+               batch_cache_[k]);
 }
 
 void BodyPass::check_batch(const BodyDrawInput& b, const TopologyBuffer& slot) const {
@@ -62,10 +101,19 @@ void BodyPass::check_batch(const BodyDrawInput& b, const TopologyBuffer& slot) c
 void BodyPass::draw(const BodySource& bodies, const glm::mat4& view, const glm::mat4& projection,
                     const glm::vec3& skin_color) {
   triangles_drawn_ = 0;
+  if (impostors_) impostors_->reset_count();
   const std::size_t n = bodies.batch_count();
+  batch_cache_.clear();
+  for (std::size_t k = 0; k < n; ++k) batch_cache_.push_back(bodies.batch(k));
+  const std::vector<std::optional<std::size_t>> slot = assign_slots(bodies);
   for (std::size_t k = 0; k < n; ++k)
-    std::visit(Overloads{[&](const BodyDrawInput& b) { draw_batch(b, slots_[k], view, projection, skin_color); }},
-               bodies.batch(k));
+    std::visit(Overloads{[&](const BodyDrawInput& b) { draw_batch(b, slots_[*slot[k]], view, projection, skin_color); },
+                         [&](const ImpostorBatch& b) {
+                           if (b.walker_count == 0) return;
+                           if (!impostors_) impostors_ = std::make_unique<ImpostorPass>();
+                           impostors_->draw(b, view, projection);
+                         }},
+               batch_cache_[k]);
 }
 
 void BodyPass::draw_batch(const BodyDrawInput& b, TopologyBuffer& slot, const glm::mat4& view,

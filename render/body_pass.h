@@ -5,6 +5,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include <glm/mat4x4.hpp>
@@ -12,6 +14,7 @@
 
 #include "render/body_source.h"
 #include "render/gl_program.h"
+#include "render/impostor_pass.h"
 #include "render/topology_buffer.h"
 
 namespace strata {
@@ -26,7 +29,7 @@ class BodyPass {
   // shader failure.
   BodyPass();
 
-  // Throws std::invalid_argument when `bodies` has more than kMaxBatches batches or a batch's arrays, sizes or
+  // Throws std::invalid_argument when `bodies` has more than kMaxBatches CPU-skinned batches or a batch's arrays, sizes or
   // triangles do not agree. Called before a frame starts, so a bad input leaves the target untouched. Indices
   // are range-checked only when a batch's topology differs from the one cached for its slot (when it would be
   // uploaded), not every frame.
@@ -36,9 +39,13 @@ class BodyPass {
             const glm::vec3& skin_color);
   // Body triangles submitted by the last draw (walkers x triangles, summed over batches).
   std::size_t triangles_drawn() const { return triangles_drawn_; }
+  // Walkers drawn as impostors by the last draw.
+  std::size_t impostors_drawn() const { return impostors_ ? impostors_->impostors_drawn() : 0; }
 
  private:
   void check_batch(const BodyDrawInput& b, const TopologyBuffer& slot) const;
+  // Reads batch_cache_ (the source's batches, fetched once per call).
+  std::vector<std::optional<std::size_t>> assign_slots(const BodySource& bodies) const;
   void draw_batch(const BodyDrawInput& b, TopologyBuffer& slot, const glm::mat4& view, const glm::mat4& projection,
                   const glm::vec3& skin_color);
 
@@ -47,12 +54,14 @@ class BodyPass {
   // the optional colours in another.
   GlObject vao_, components_, colors_;
   std::array<TopologyBuffer, kMaxBatches> slots_;  // batch k of a frame uses slot k
+  std::unique_ptr<ImpostorPass> impostors_;         // made on the first impostor batch
   std::size_t triangles_drawn_ = 0;
   // Kept between frames so steady-state rendering does not allocate.
   std::vector<std::uint32_t> optimized_;
   std::vector<int> counts_;
   std::vector<const void*> offsets_;
   std::vector<int> base_vertices_;
+  mutable std::vector<BodyBatch> batch_cache_;  // this call's batches (check and draw each fetch them once)
 };
 
 }  // namespace strata

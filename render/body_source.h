@@ -4,9 +4,10 @@
 // carries and therefore how the pass draws it. The pass never sees the scene, the systems or raw arrays passed
 // alongside; the systems never see GL.
 //
-// Today there is one kind of batch, BodyDrawInput: bodies skinned on the CPU (the skin system's output), six
-// world-space SoA streams the pass uploads every frame and draws with one multi-draw per batch. CpuSkinnedBodies
-// is the source of those, wrapping the inputs render/scene_draw.h builds from a Crowd.
+// Two kinds of batch today: BodyDrawInput, bodies skinned on the CPU (the skin system's output), six world-space
+// SoA streams the pass uploads every frame and draws with one multi-draw per batch; and ImpostorBatch, far
+// walkers drawn as one textured quad each from the rig's baked atlas (render/impostor_pass.h). CpuSkinnedBodies
+// wraps CPU-skinned inputs alone; BodyBatches any mix, as render/scene_draw.h builds them from a Crowd.
 //
 // Adding a kind (the body pass is the one pass that changes; the systems, the skeleton and ground passes and the
 // facade's callers do not):
@@ -22,9 +23,7 @@
 // which the pass uploads once and keys by address as it keys index buffers by triangle list today; and, every
 // frame, the walkers' skinning matrices (the walker table's `skinning` field, F(j) A(j)^-1, 12 floats per joint),
 // placements and muscle forces, streamed into shader storage buffers for a vertex shader that blends them. The
-// systems already compute all of these; only the scene would skip the skin system for those walkers. An impostor
-// batch would carry per walker a position, a heading and an atlas frame (and, once, the atlas image); the pass
-// draws one camera-facing quad per walker with its own program.
+// systems already compute all of these; only the scene would skip the skin system for those walkers.
 //
 // Costs: virtual calls per batch (the pass asks for each batch twice a frame, to check it and to draw it), never
 // per walker or per vertex; a batch is a few pointers and sizes, copied by value. The rejected alternative, a
@@ -34,6 +33,8 @@
 #include <cstdint>
 #include <span>
 #include <variant>
+
+#include "components/impostor_atlas.h"
 
 namespace strata {
 
@@ -51,8 +52,17 @@ struct BodyDrawInput {
   const std::uint32_t* rgba = nullptr;
 };
 
+// Impostors (components/impostor_atlas.h): far walkers drawn as one camera-facing quad each from `atlas`, which the
+// pass uploads once and keys by its address and key. Per walker: ground position, heading (rad about +Y), scale
+// (stature / the rig's) and gait phase in [0, 1), each an array read at [w] (the impostor table's columns).
+struct ImpostorBatch {
+  const ImpostorAtlas* atlas = nullptr;
+  const float *x = nullptr, *y = nullptr, *z = nullptr, *heading = nullptr, *scale = nullptr, *phase = nullptr;
+  std::size_t walker_count = 0;
+};
+
 // One draw's worth of bodies; the alternative held is the batch's kind (see the top of this file to add one).
-using BodyBatch = std::variant<BodyDrawInput>;
+using BodyBatch = std::variant<BodyDrawInput, ImpostorBatch>;
 
 // Where the body pass gets its batches from, for one frame. Batches are drawn in order, each with its own cached
 // topology (at most BodyPass::kMaxBatches, 4, per frame); the pointers they hold must stay valid until the
@@ -62,6 +72,18 @@ class BodySource {
   virtual ~BodySource() = default;
   virtual std::size_t batch_count() const = 0;
   virtual BodyBatch batch(std::size_t index) const = 0;
+};
+
+// Any batches, in the order given (render/scene_draw.h builds a crowd's: its mesh levels, then its impostors).
+// Holds the span, not a copy.
+class BodyBatches final : public BodySource {
+ public:
+  explicit BodyBatches(std::span<const BodyBatch> batches) : batches_(batches) {}
+  std::size_t batch_count() const override { return batches_.size(); }
+  BodyBatch batch(std::size_t index) const override { return batches_[index]; }
+
+ private:
+  std::span<const BodyBatch> batches_;
 };
 
 // The CPU-skinned bodies of a frame, one batch per input (body level). Holds the span, not a copy.

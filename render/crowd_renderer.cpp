@@ -3,6 +3,7 @@
 #include <epoxy/gl.h>
 
 #include <optional>
+#include <vector>
 
 #include "render/body_pass.h"
 #include "render/ground_pass.h"
@@ -22,6 +23,7 @@ struct CrowdRenderer::Impl {
   GroundPass ground;
   std::optional<ReferencePass> reference;  // built on the benchmark's first call
   std::size_t triangles_drawn = 0;
+  std::vector<glm::vec3> ground_points;  // scratch
 };
 
 CrowdRenderer::CrowdRenderer(int width, int height, RenderOptions options)
@@ -34,6 +36,7 @@ int CrowdRenderer::height() const { return impl_->target.height(); }
 RenderOptions& CrowdRenderer::options() { return impl_->options; }
 void CrowdRenderer::resize(int width, int height) { impl_->target.resize(width, height); }
 std::size_t CrowdRenderer::triangles_drawn() const { return impl_->triangles_drawn; }
+std::size_t CrowdRenderer::impostors_drawn() const { return impl_->body.impostors_drawn(); }
 
 void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
                            const BodyDrawInput* bodies) {
@@ -56,7 +59,16 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
   check_skeleton_input(input);
   const RenderOptions& o = r.options;
   r.target.begin_frame(o.clear_color);
-  if (o.draw_ground) r.ground.draw(drawn_joint_positions(input), view, projection, o.ground_color, o.clear_color);
+  if (o.draw_ground) {
+    std::span<const glm::vec3> points = drawn_joint_positions(input);
+    if (!input.ground_points.empty()) {
+      // Joints and the impostors' feet together; only frames with impostors pay for the copy.
+      r.ground_points.assign(points.begin(), points.end());
+      r.ground_points.insert(r.ground_points.end(), input.ground_points.begin(), input.ground_points.end());
+      points = r.ground_points;
+    }
+    r.ground.draw(points, view, projection, o.ground_color, o.clear_color);
+  }
   if (o.draw_skeleton) r.skeleton.draw(input, view, projection, o);
   r.body.draw(bodies, view, projection, o.skin_color);
   r.triangles_drawn = r.body.triangles_drawn();

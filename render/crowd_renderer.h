@@ -5,7 +5,8 @@
 //   render/render_target.h   the 4x multisampled colour + depth framebuffer, resolve, read-back, blit
 //   render/ground_pass.h     the grid-lined ground under the walkers
 //   render/skeleton_pass.h   bones and joints, instanced
-//   render/body_pass.h       the skinned bodies, read from a BodySource (render/body_source.h)
+//   render/body_pass.h       the skinned bodies, read from a BodySource (render/body_source.h), and impostors
+//                            (render/impostor_pass.h)
 //   render/reference_pass.h  the render benchmark's raw-instancing reference
 // Their shaders are the files under render/shaders/, embedded in the library. A frame draws ground, skeletons,
 // then bodies, and resolves. The caller owns the GL context, which must be current for every call including the
@@ -54,6 +55,8 @@ class CrowdRenderer {
               std::span<const BodyDrawInput> body_levels);
   // Body triangles submitted by the last render() (walkers x triangles per level) or render_instanced_reference.
   std::size_t triangles_drawn() const;
+  // Walkers drawn as impostors by the last render().
+  std::size_t impostors_drawn() const;
   // The render benchmark's reference (`strata bench --render`): walker 0 of `mesh` uploaded once as a static
   // mesh and drawn offsets.size() times in one glDrawElementsInstanced, each copy moved by its offset, into the
   // same target with the same material: raw instancing of the same triangles, with nothing streamed.

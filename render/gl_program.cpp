@@ -18,6 +18,7 @@ GlObject::GlObject(GlKind kind) : kind_(kind) {
     case GlKind::kFramebuffer: glCreateFramebuffers(1, &name_); break;
     case GlKind::kRenderbuffer: glCreateRenderbuffers(1, &name_); break;
     case GlKind::kProgram: name_ = glCreateProgram(); break;
+    case GlKind::kTexture2DArray: glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &name_); break;
   }
 }
 
@@ -38,6 +39,7 @@ void GlObject::reset() {
     case GlKind::kFramebuffer: glDeleteFramebuffers(1, &name_); break;
     case GlKind::kRenderbuffer: glDeleteRenderbuffers(1, &name_); break;
     case GlKind::kProgram: glDeleteProgram(name_); break;
+    case GlKind::kTexture2DArray: glDeleteTextures(1, &name_); break;
   }
   name_ = 0;
 }

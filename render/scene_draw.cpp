@@ -4,6 +4,7 @@
 
 #include <glm/common.hpp>
 
+#include "render/impostor_bake.h"
 #include "rig/subdiv_topology.h"
 #include "systems/pose_gather.h"
 
@@ -36,31 +37,65 @@ std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd) {
   return inputs;
 }
 
+ImpostorBatch impostor_batch(const Crowd& crowd) {
+  ImpostorBatch batch;
+  const SoaTable& t = crowd.table(DetailSlot::Impostor);
+  if (t.size() == 0 || !crowd.impostor_atlas) return batch;
+  batch.atlas = crowd.impostor_atlas.get();
+  const float* placement = t.f32_base(kWalkerPlacement);
+  batch.x = placement;
+  batch.y = placement + t.stride();
+  batch.z = placement + 2 * t.stride();
+  batch.heading = placement + 3 * t.stride();
+  batch.scale = placement + 4 * t.stride();
+  batch.phase = t.f32(kWalkerGait, kGaitPhase).data();
+  batch.walker_count = t.size();
+  return batch;
+}
+
+void impostor_feet(const Crowd& crowd, std::vector<glm::vec3>& out) {
+  const SoaTable& t = crowd.table(DetailSlot::Impostor);
+  out.resize(t.size());
+  for (std::size_t w = 0; w < t.size(); ++w)
+    out[w] = {t.f32(kWalkerPlacement, 0)[w], t.f32(kWalkerPlacement, 1)[w], t.f32(kWalkerPlacement, 2)[w]};
+}
+
 bool body_bounds(const Crowd& crowd, glm::vec3& lo, glm::vec3& hi) {
   bool any = false;
-  for (std::size_t slot = 0; slot < kDetailSlots; ++slot) {
-    glm::vec3 a, b;
-    if (crowd.skinned[slot].walkers == 0 || !crowd.skinned[slot].bounds(a, b)) continue;
+  auto add = [&](const glm::vec3& a, const glm::vec3& b) {
     lo = any ? glm::min(lo, a) : a;
     hi = any ? glm::max(hi, b) : b;
     any = true;
+  };
+  for (std::size_t slot = 0; slot < kDetailSlots; ++slot) {
+    glm::vec3 a, b;
+    if (crowd.skinned[slot].walkers == 0 || !crowd.skinned[slot].bounds(a, b)) continue;
+    add(a, b);
+  }
+  // Impostors: their feet, up to their stature.
+  const SoaTable& t = crowd.table(DetailSlot::Impostor);
+  for (std::size_t w = 0; w < t.size(); ++w) {
+    const glm::vec3 foot(t.f32(kWalkerPlacement, 0)[w], t.f32(kWalkerPlacement, 1)[w], t.f32(kWalkerPlacement, 2)[w]);
+    const float height = crowd.skin.body_height * t.f32(kWalkerPlacement, 4)[w];
+    add(foot - glm::vec3(0.3f * height, 0.0f, 0.3f * height), foot + glm::vec3(0.3f * height, height, 0.3f * height));
   }
   return any;
 }
 
-void gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out) {
+std::size_t gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out) {
   const std::size_t joints = crowd.joint_count();
-  out.resize(crowd.walker_count() * joints);
+  out.resize((crowd.walker_count() - crowd.table(DetailSlot::Impostor).size()) * joints);
   std::size_t at = 0;
   std::vector<glm::vec3> table_joints;
   for (std::size_t slot = 0; slot < kDetailSlots; ++slot) {
     // walker_lanes wants a mutable table; gathering only reads it.
     SoaTable& t = const_cast<SoaTable&>(crowd.world.table(crowd.tables[slot]));
-    if (t.size() == 0) continue;
+    if (t.size() == 0 || is_light_walker_table(t)) continue;
     gather_joint_positions(walker_lanes(t, crowd.joint_count()), table_joints);
     std::copy(table_joints.begin(), table_joints.end(), out.begin() + static_cast<std::ptrdiff_t>(at));
     at += table_joints.size();
   }
+  return joints == 0 ? 0 : at / joints;
 }
 
 LodView lod_view(const OrbitCamera& camera, float aspect, int viewport_height) {
@@ -88,12 +123,22 @@ bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderSc
 
 std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
                          int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options) {
-  gather_crowd_joints(crowd, scratch.joints);
+  const std::size_t with_joints = gather_crowd_joints(crowd, scratch.joints);
   std::vector<BodyDrawInput> bodies = body_draw_inputs(crowd);
   if (options.recolour) options.recolour(bodies);
   renderer.options().draw_skeleton = crowd.skin.level.is_none() || options.skeleton_overlay;
-  renderer.render({&crowd.rig().skeleton, scratch.joints, crowd.walker_count()}, camera.view(),
-                  camera.projection(aspect), bodies);
+  SkeletonDrawInput skeletons{&crowd.rig().skeleton, scratch.joints, with_joints};
+  if (crowd.table(DetailSlot::Impostor).size() > 0) {
+    // The first frame with impostors bakes (or loads) the rig's atlas: seconds once, then cached on disk.
+    ensure_impostor_atlas(crowd, renderer.options().skin_color);
+    impostor_feet(crowd, scratch.impostor_feet);
+    skeletons.ground_points = scratch.impostor_feet;
+    scratch.batches.assign(bodies.begin(), bodies.end());
+    scratch.batches.emplace_back(impostor_batch(crowd));
+    renderer.render(skeletons, camera.view(), camera.projection(aspect), BodyBatches(scratch.batches));
+  } else {
+    renderer.render(skeletons, camera.view(), camera.projection(aspect), bodies);
+  }
   set_crowd_camera(crowd, camera, aspect, viewport_height);
   return renderer.triangles_drawn();
 }

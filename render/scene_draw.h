@@ -21,11 +21,15 @@ namespace strata {
 // What the body pass draws from the crowd's last step(): one input per table skinned (several under
 // DetailLevel::automatic), in slot order; empty when the crowd has no body to draw.
 std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd);
-// Bounds of every skinned vertex drawn; false when none.
+// The crowd's impostors as the body pass draws them (no walkers until the crowd has an atlas:
+// render/impostor_bake.h ensure_impostor_atlas, which render_frame calls).
+ImpostorBatch impostor_batch(const Crowd& crowd);
+// Bounds of every skinned vertex drawn and of every impostor (its feet up to its stature); false when none.
 bool body_bounds(const Crowd& crowd, glm::vec3& lo, glm::vec3& hi);
-// Every walker's world-space joint positions, walker-major, table by table (the skeleton pass's input and what a
-// camera frames when there are no bodies). Resizes `out` (grown, never shrunk in capacity).
-void gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out);
+// Every posed walker's world-space joint positions, walker-major, table by table (the skeleton pass's input and
+// what a camera frames when there are no bodies); impostors have no pose and none. Resizes `out` (grown, never
+// shrunk in capacity); returns the walkers gathered.
+std::size_t gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out);
 // The level-of-detail view (culling, projected sizes) of a camera rendering `viewport_height` pixels high.
 LodView lod_view(const OrbitCamera& camera, float aspect, int viewport_height);
 // Hands `camera` to the crowd's level-of-detail stage: from the next step() on, walkers it does not see are
@@ -40,6 +44,8 @@ bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderSc
 // Per-frame scratch a command keeps between frames, so render_frame allocates nothing in steady state.
 struct RenderScratch {
   std::vector<glm::vec3> joints;
+  std::vector<glm::vec3> impostor_feet;
+  std::vector<BodyBatch> batches;
 };
 
 struct RenderFrameOptions {

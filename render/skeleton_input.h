@@ -14,6 +14,8 @@ struct SkeletonDrawInput {
   // World-space joint positions, walker-major: joint j of walker w at [w * joint_count + j].
   std::span<const glm::vec3> joint_positions;
   std::size_t walker_count = 0;
+  // Further points the ground must reach under: walkers drawn without joints (impostors), at their feet.
+  std::span<const glm::vec3> ground_points = {};
 };
 
 // Throws std::invalid_argument when `input` has walkers but no skeleton, a skeleton whose parents disagree with

@@ -15,7 +15,7 @@ DetailLevel usable_level(const Crowd& crowd, DetailLevel requested) {
   const Body* body = crowd.rig().body.get();
   if (!body || body->levels.empty() || requested.is_none()) return DetailLevel::none();
   if (requested.is_subdiv()) return body->cage ? requested : DetailLevel::mesh(0);
-  if (requested.is_automatic()) return requested;
+  if (requested.is_automatic() || requested.is_impostor()) return requested;
   return DetailLevel::mesh(std::min(requested.index(), static_cast<int>(body->levels.size()) - 1));
 }
 
@@ -40,7 +40,7 @@ void rebuild_layouts(Crowd& crowd) {
   skin.subdiv = skin.level.is_subdiv() ? body_subdiv_surface(*crowd.rig().body, skin.level.index()) : nullptr;
   skin.layouts = {};
   skin.cage_muscles = MuscleDisplacementList{};
-  if (skin.level.is_none() || skin.level.is_subdiv()) {
+  if (skin.level.is_none() || skin.level.is_subdiv() || skin.level.is_impostor()) {
     rebuild_muscle_coefficients(crowd);
     return;
   }
@@ -78,6 +78,7 @@ void set_skinning_mode(Crowd& crowd, SkinningMode mode) {
 }
 
 void set_muscles_enabled(Crowd& crowd, bool on) {
+  if (crowd.skin.muscles_on != on) crowd.impostor_atlas = nullptr;  // baked with or without them
   crowd.skin.muscles_on = on;
   rebuild_layouts(crowd);
 }
@@ -98,6 +99,7 @@ void set_body(Crowd& crowd, std::shared_ptr<const Body> body) {
   Rig edited = current;
   edited.body = std::move(body);
   crowd.rigs.replace(crowd.rig_id, std::move(edited));
+  crowd.impostor_atlas = nullptr;  // baked from the old weights
   // The mocap rig points at the skeleton, which now lives in the new rig.
   CrowdMotion& m = crowd.motion;
   if (m.mocap) m.mocap_rig = std::make_unique<const MocapRig>(make_mocap_rig(crowd.rig().skeleton, m.mocap->clip, m.mocap->contacts));
@@ -109,7 +111,19 @@ DetailSlot initial_slot(const Crowd& crowd) {
   if (level.is_none()) return DetailSlot::NoBody;
   if (level.is_subdiv()) return DetailSlot::Refined;
   if (level.is_automatic()) return DetailSlot::Mesh0;
+  if (level.is_impostor()) return crowd_may_use_impostors(crowd) ? DetailSlot::Impostor : DetailSlot::NoBody;
   return mesh_slot(level.index());
+}
+
+DetailSlot spawn_slot(const Crowd& crowd) {
+  if (crowd.skin.level.is_automatic() && crowd_may_use_impostors(crowd)) return DetailSlot::Impostor;
+  return initial_slot(crowd);
+}
+
+bool crowd_may_use_impostors(const Crowd& crowd) {
+  const Rig& rig = crowd.rig();
+  return crowd.motion.source == MotionSource::Walk && crowd.motion.locomotion != nullptr && rig.body != nullptr &&
+         !rig.body->levels.empty();
 }
 
 const SkinLayout& current_layout(const Crowd& crowd) {

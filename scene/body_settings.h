@@ -32,8 +32,17 @@ void set_muscle_gains(Crowd& crowd, MuscleGains gains);
 // immutable and may be shared), so references into crowd.rig() taken before the call dangle.
 void set_body(Crowd& crowd, std::shared_ptr<const Body> body);
 
-// The table a walker goes to before any camera has seen it: the finest slot of the level used.
+// The table a walker goes to before any camera has seen it: the finest slot of the level used (the impostor
+// table under DetailLevel::impostor, or the skeleton-only table when this crowd cannot have impostors).
 DetailSlot initial_slot(const Crowd& crowd);
+// The table a new walker is put in: initial_slot, except that a walking crowd under DetailLevel::automatic starts
+// its walkers as impostors, so spawning 100,000 of them never holds 100,000 wide rows (tables grow and never
+// shrink); the first step() gives the near ones their meshes (all of them, without a camera), restarting their
+// walk.
+DetailSlot spawn_slot(const Crowd& crowd);
+// Impostors show the baked walk, so only a walking crowd with a body has them; clip and capture crowds keep every
+// visible walker a mesh (their motion is not the walk the atlas holds).
+bool crowd_may_use_impostors(const Crowd& crowd);
 // The vertex grouping of the mesh level used (DetailLevel::mesh), or of level 0 under automatic; empty at S
 // levels (the cage's is crowd.skin.subdiv->cage_layout) and without a body.
 const SkinLayout& current_layout(const Crowd& crowd);

@@ -15,8 +15,14 @@ const char* slot_name(DetailSlot slot) {
     case DetailSlot::Refined: return "refined";
     case DetailSlot::Culled: return "culled";
     case DetailSlot::NoBody: return "no_body";
+    case DetailSlot::Impostor: return "impostor";
   }
   return "?";
+}
+
+bool slot_is_light(DetailSlot slot, MotionSource source) {
+  if (slot == DetailSlot::Impostor) return true;
+  return slot == DetailSlot::Culled && source == MotionSource::Walk;
 }
 
 Crowd::Crowd(Rig r) {
@@ -28,10 +34,15 @@ Crowd::Crowd(Rig r) {
                                 " body levels, the body has " + std::to_string(r.body ? r.body->levels.size() : 0));
   rig_id = rigs.add(std::move(r));
   // One table per slot, identical fields, so World::move copies every field and a walker keeps its whole state
-  // whatever table it moves to.
-  for (std::size_t s = 0; s < kDetailSlots; ++s)
-    tables[s] = world.add_table(
-        make_walker_table(name + "." + slot_name(static_cast<DetailSlot>(s)), joints, muscle_points));
+  // whatever table it moves to; except the impostors' table, which keeps only what a far walker needs. The culled
+  // table stays wide although a walking crowd's culled walkers are light too: clip and capture crowds run their
+  // culled walkers whole, and a walker leaving the view keeps its pose rows for the frame it comes back.
+  for (std::size_t s = 0; s < kDetailSlots; ++s) {
+    const std::string table_name = name + "." + slot_name(static_cast<DetailSlot>(s));
+    tables[s] = world.add_table(static_cast<DetailSlot>(s) == DetailSlot::Impostor
+                                    ? make_light_walker_table(table_name)
+                                    : make_walker_table(table_name, joints, muscle_points));
+  }
   try {
     motion.locomotion = std::make_unique<const LocomotionRig>(make_locomotion_rig(rig().skeleton));
   } catch (const std::exception& e) {

@@ -14,6 +14,12 @@
 // over table k, and a walker whose level changes is moved between tables (World::move) by the level-of-detail
 // stage, which keeps hysteresis by reading the table a walker is in. No per-walker flag is tested in a hot loop.
 //
+// The Impostor table is narrower than the others: only the fields an impostor reads or the gait clock writes
+// (placement, clock, gait, path, root translation) have their full width, the rest one unused column, so a far
+// walker costs about 270 bytes instead of a full walker's kilobytes (make_light_walker_table). World::move copies
+// only fields of equal width, so a walker leaving it gets a fresh pose, and step() restarts its walk from its
+// gait phase and path position before anything reads the pose (StartWalkingJob).
+//
 // Skinned vertices are per-slot component storage: `skinned[slot]` holds block b's deformed body for row b of
 // that slot's table, sized by that table's walkers (grown, never shrunk), so memory follows the walkers drawn at
 // each level rather than the crowd.
@@ -30,6 +36,7 @@
 #include <vector>
 
 #include "components/detail_level.h"
+#include "components/impostor_atlas.h"
 #include "components/rig.h"
 #include "components/skin_layout.h"
 #include "components/walker.h"
@@ -57,12 +64,18 @@ enum class DetailSlot : std::uint8_t {
   Refined,  // the cage skinned and refined (S1..S3)
   Culled,   // outside the camera: simulated, not skinned, not drawn
   NoBody,   // DetailLevel::none(), or a rig without a body: simulated, drawn as a skeleton
+  Impostor, // far away: drawn as one quad from the rig's impostor atlas; only the gait clock and the path run
 };
-inline constexpr std::size_t kDetailSlots = 6;
+inline constexpr std::size_t kDetailSlots = 7;
 inline constexpr std::size_t slot_index(DetailSlot s) { return static_cast<std::size_t>(s); }
 inline constexpr DetailSlot mesh_slot(int level) { return static_cast<DetailSlot>(level); }
 static_assert(kMaxMeshLevels == 3, "one Mesh slot per mesh level");
 const char* slot_name(DetailSlot slot);
+// Tables whose walkers run the whole pipeline (locomotion or their clip, IK, FK, muscles) this frame. A walking
+// crowd's impostors and culled walkers only advance their gait clock along their path (simulation level of
+// detail): nothing they would compute is shown. Clip and capture walkers are never impostors (their motion is
+// not the baked walk) and keep their whole pipeline when culled, since a capture's foot locks carry state.
+bool slot_is_light(DetailSlot slot, MotionSource source);
 
 // How walkers move: the motion source and what it needs (per rig, built once, read by the systems).
 struct CrowdMotion {
@@ -97,9 +110,20 @@ struct CrowdLod {
   LodPolicy policy;
   // Walkers skinned at levels 0, 1, 2 (S levels count as 0) by the last step, and walkers culled.
   std::array<std::size_t, 4> counts{};
+  std::size_t impostors = 0;    // walkers drawn as impostors by the last step
+  std::size_t over_budget = 0;  // of those, walkers tall enough for a mesh that the mesh budget turned away
   // Scratch of the level-of-detail stage, per table: each row's slot for the next skin pass. Grown, never shrunk.
   std::array<std::vector<std::uint8_t>, kDetailSlots> decided;
   std::vector<std::pair<Entity, DetailSlot>> moves;  // scratch: the walkers that change tables this frame
+  // Scratch of the mesh budget, per table: each row's camera distance; and the candidates for a mesh.
+  std::array<std::vector<float>, kDetailSlots> distance;
+  struct Candidate {
+    float key;
+    std::uint32_t slot, row;
+    std::uint32_t walker;  // entity index, the tie-break that makes the cut independent of table order
+  };
+  std::vector<Candidate> candidates;
+  std::vector<Entity> restarted;  // scratch: walkers that left a light table this frame (their walk restarts)
 };
 
 struct Crowd {
@@ -116,7 +140,11 @@ struct Crowd {
   CrowdMotion motion;
   CrowdSkin skin;
   CrowdLod lod;
-  std::array<SkinnedCrowd, kDetailSlots> skinned;  // per slot; Culled and NoBody stay empty
+  std::array<SkinnedCrowd, kDetailSlots> skinned;  // per slot; Culled, NoBody and Impostor stay empty
+  // The rig's impostor atlas for this crowd's walk, once the renderer has baked or loaded it
+  // (render/impostor_bake.h ensure_impostor_atlas); dropped when the body or its muscle layer is switched. Baked
+  // with the default muscle gains: a gain edit shows on meshes, not on impostors.
+  std::shared_ptr<const ImpostorAtlas> impostor_atlas;
 
   const Rig& rig() const { return rigs.get(rig_id); }
   std::uint32_t joint_count() const { return static_cast<std::uint32_t>(rig().skeleton.joint_count()); }

@@ -138,14 +138,23 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   } else {
     throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");
   }
-  spawn_crowd(*scene, config);
-  set_skinning_mode(*scene, o.skinning);  // before the level, so the layouts are built once, with their centres
+  // The skinning mode before the level, so the layouts are built once, with their centres; the level before the
+  // walkers: under auto, walkers are spawned straight into the impostor table (scene/body_settings.h).
+  set_skinning_mode(*scene, o.skinning);
   set_detail_level(*scene, o.level);
+  spawn_crowd(*scene, config);
   if (o.level.is_mesh() && scene->rig().body && static_cast<std::size_t>(o.level.index()) >= scene->rig().body->levels.size())
     throw std::invalid_argument("--level " + o.level.name() + ": the body has " +
                                 std::to_string(scene->rig().body->levels.size()) +
                                 " level(s); use 0 to " + std::to_string(scene->rig().body->levels.size() - 1) +
                                 ", auto or -1");
+  if (o.level.is_impostor() && !crowd_may_use_impostors(*scene))
+    throw std::invalid_argument("--level impostor: impostors show the walk generator's walk; this crowd " +
+                                std::string(config.motion == MotionSource::Walk ? "has no body to bake them from"
+                                                                                 : "plays a clip or a capture") +
+                                " (use 0, 1, 2 or auto)");
+  scene->lod.policy.mesh_budget = o.mesh_budget;
+  scene->lod.policy.impostor_px = o.impostor_px;
   if (o.level.is_subdiv() && scene->skin.level != o.level)
     throw std::invalid_argument("--level " + o.level.name() +
                                 " needs a subdivision cage; only the shipped body has one");

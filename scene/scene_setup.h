@@ -28,6 +28,8 @@ struct SceneOptions {
   float muscle_gain = 1.0f;         // scales every muscle's forces
   std::string muscle_overrides;     // per-muscle gains file (io/muscle_file.h)
   std::string binding_overrides;    // step-3 overrides file replacing the shipped ones (shipped body only)
+  std::uint32_t mesh_budget = LodPolicy{}.mesh_budget;  // most walkers drawn as meshes under auto (0 = no cap)
+  float impostor_px = LodPolicy{}.impostor_px;          // walkers shorter on screen are impostors under auto
 };
 
 // Resolves --clip to a walker clip selector: a clip name or index, "all" (every clip at once, as an X3D browser

@@ -29,7 +29,7 @@ glm::vec3 grid_position(std::size_t i, std::size_t n, float spacing) {
 }
 
 void reserve(Crowd& crowd, std::size_t more) {
-  SoaTable& t = crowd.table(initial_slot(crowd));
+  SoaTable& t = crowd.table(spawn_slot(crowd));
   t.reserve(t.size() + more);
 }
 
@@ -120,7 +120,9 @@ void spawn_crowd(Crowd& crowd, const CrowdConfig& config) {
 }
 
 Entity spawn_clip_walker(Crowd& crowd, const glm::vec3& position, float heading, float phase, float rate, int clip) {
-  const Entity e = crowd.world.create(crowd.tables[slot_index(initial_slot(crowd))]);
+  // Made in a wide table: a walker starting as an impostor (spawn_walker) is set up with its whole walk first.
+  const DetailSlot start = spawn_slot(crowd);
+  const Entity e = crowd.world.create(crowd.tables[slot_index(start == DetailSlot::Impostor ? DetailSlot::Mesh0 : start)]);
   const EntityLocation loc = crowd.world.location(e);
   SoaTable& t = crowd.world.table(loc.table);
   const float values[5] = {position.x, position.y, position.z, heading, 1.0f};
@@ -148,6 +150,8 @@ Entity spawn_walker(Crowd& crowd, std::uint32_t path, float distance, float phas
   for (const auto& [component, value] : values) t.f32(kWalkerGait, component)[loc.block] = value;
   t.u32(kWalkerPath)[loc.block] = path;
   run_or_throw(make_start_walking_job(*m.locomotion, m.paths, t, loc.block, m.style), "start_walking");
+  const DetailSlot start = spawn_slot(crowd);
+  if (start == DetailSlot::Impostor) crowd.world.move(e, crowd.tables[slot_index(start)]);
   return e;
 }
 

@@ -22,7 +22,18 @@ std::uint64_t state_hash(const Crowd& crowd) {
   const std::uint32_t width = crowd.joint_count() * kAffineFloats;
   for (const std::uint32_t field : {std::uint32_t(kWalkerWorld), std::uint32_t(kWalkerSkinning)})
     for (std::uint32_t c = 0; c < width; ++c)
-      for (const EntityLocation& at : where) mix(crowd.world.table(at.table).f32(field, c)[at.block]);
+      for (const EntityLocation& at : where) {
+        const SoaTable& t = crowd.world.table(at.table);
+        // A walker without a pose (an impostor) has only its column 0 of these, unused; its placement and
+        // gait phase are hashed below instead.
+        if (!is_light_walker_table(t)) mix(t.f32(field, c)[at.block]);
+      }
+  for (const EntityLocation& at : where) {
+    const SoaTable& t = crowd.world.table(at.table);
+    if (!is_light_walker_table(t)) continue;
+    for (std::uint32_t c = 0; c < 5; ++c) mix(t.f32(kWalkerPlacement, c)[at.block]);
+    mix(t.f32(kWalkerGait, kGaitPhase)[at.block]);
+  }
   return h;
 }
 

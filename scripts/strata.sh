@@ -23,7 +23,7 @@ PACKAGES=(
   libglm-dev libglfw3-dev libosd-dev libtinygltf-dev libopenimageio-dev
   libgl-dev libegl-dev libgl1-mesa-dri libegl-mesa0 libepoxy-dev
   libpugixml-dev libtbb-dev libcli11-dev nlohmann-json3-dev
-  libgtest-dev libbenchmark-dev libmeshoptimizer-dev libimgui-dev
+  libgtest-dev libbenchmark-dev libmeshoptimizer-dev libimgui-dev zlib1g-dev
   xvfb xauth
   ffmpeg
 )

@@ -118,6 +118,33 @@ struct LocomotionJob : LocomotionColumns {
   bool run() const;
 };
 
+// Simulation level of detail: the gait clock alone for walkers nobody sees in detail (impostors, culled walkers
+// of a walking crowd). Advances time, cadence, phase and path distance by dt and writes the placement, exactly as
+// LocomotionJob does for the same walker, so a walker keeps its place and phase whichever job moves it; writes no
+// footprints, pelvis, rotations or goals. A walker going back to the whole walk restarts it with
+// StartWalkingJob, which derives feet and pelvis from the phase and distance. ~15x cheaper than walking.
+//
+//   reads:  rig (rig height), paths, style, dt, path (U32)
+//   writes: gait (time-keeping components: cadence, cadence target, phase, distance), time, placement (5)
+struct GaitAdvanceJob {
+  ColumnView<const std::uint32_t> path;
+  ColumnView<float> gait;
+  ColumnView<float> time;
+  ColumnView<float> placement;
+  const LocomotionRig* rig = nullptr;
+  std::span<const CardinalSpline> paths;
+  const GaitStyle* style = nullptr;
+  float dt = 0.0f;
+
+  // Rig and style set, paths non-empty, dt finite, the views their widths with the same rows and not overlapping,
+  // every walker's gait state valid (as LocomotionJob's).
+  bool validate() const;
+  bool run() const;
+};
+// Over every walker of `walkers`: a walker table, wide or light (components/walker.h).
+GaitAdvanceJob make_gait_advance_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths,
+                                     SoaTable& walkers, float dt, const GaitStyle& style);
+
 LocomotionJob make_locomotion_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths, SoaTable& walkers,
                                   float dt, const GaitStyle& style);
 StartWalkingJob make_start_walking_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths,

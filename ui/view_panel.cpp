@@ -10,6 +10,7 @@
 #include "components/body.h"
 #include "components/skeleton.h"
 #include "profiling/profiler.h"
+#include "scene/body_settings.h"
 #include "scene/crowd.h"
 #include "scene/body_settings.h"
 
@@ -44,6 +45,7 @@ std::vector<DetailLevel> selectable_body_levels(const Crowd& scene) {
   if (!body || body->levels.empty()) return levels;
   for (std::size_t l = 0; l < body->levels.size(); ++l) levels.push_back(DetailLevel::mesh(static_cast<int>(l)));
   levels.push_back(DetailLevel::automatic());
+  if (crowd_may_use_impostors(scene)) levels.push_back(DetailLevel::impostor());
   if (body->cage)
     for (int d = 1; d <= kMaxSubdivDepth; ++d) levels.push_back(DetailLevel::subdiv(d));
   return levels;
@@ -63,7 +65,9 @@ std::string level_label(const Crowd& scene, DetailLevel level) {
   if (level.is_mesh() && body && static_cast<std::size_t>(level.index()) < body->levels.size()) {
     label += " (" + std::to_string(body->levels[static_cast<std::size_t>(level.index())].mesh.vertex_count()) + " v)";
   } else if (level.is_automatic()) {
-    label += " (by size on screen)";
+    label += crowd_may_use_impostors(scene) ? " (by size on screen, impostors far)" : " (by size on screen)";
+  } else if (level.is_impostor()) {
+    label += " (every walker a quad)";
   } else if (level.is_subdiv()) {
     label += " (cage refined " + std::to_string(level.index()) + "x)";
   }
@@ -149,9 +153,20 @@ void level_section(Crowd& scene, UiProbe* probe) {
   ImGui::SliderFloat("hysteresis", &policy.hysteresis, 1.0f, 2.0f, "%.2f");
   note(probe, "hysteresis");
   policy.level1_px = std::min(policy.level1_px, policy.level0_px);
+  if (crowd_may_use_impostors(scene)) {
+    ImGui::SliderFloat("impostor below", &policy.impostor_px, 0.0f, 400.0f, "%.0f px");
+    note(probe, "impostor below");
+    int budget = static_cast<int>(std::min<std::uint32_t>(policy.mesh_budget, 100000));
+    if (ImGui::SliderInt("mesh budget", &budget, 0, 500, budget == 0 ? "no cap" : "%d walkers"))
+      policy.mesh_budget = static_cast<std::uint32_t>(std::max(budget, 0));
+    note(probe, "mesh budget");
+    policy.impostor_px = std::min(policy.impostor_px, policy.level1_px);
+  }
   ImGui::EndDisabled();
   const auto counts = scene.lod.counts;
-  ImGui::Text("skinned at 0/1/2: %zu / %zu / %zu, culled %zu", counts[0], counts[1], counts[2], counts[3]);
+  ImGui::Text("meshes at 0/1/2: %zu / %zu / %zu", counts[0], counts[1], counts[2]);
+  ImGui::Text("impostors %zu, culled %zu", scene.lod.impostors, counts[3]);
+  if (scene.lod.over_budget > 0) ImGui::Text("over the mesh budget: %zu (drawn as impostors)", scene.lod.over_budget);
 }
 
 void gait_section(Crowd& scene, UiProbe* probe) {

@@ -291,7 +291,10 @@ TEST(StrataBench, TimesTheFullSimulationWithoutRendering) {
 
 TEST(StrataBench, RenderPassAgainstRawInstancing) {
   const fs::path json = scratch("bench_render.json");
-  Result r = run("bench --walkers 6 --frames 4 --level auto --render --width 160 --height 120 --json " + json.string());
+  // Meshes only (--impostor-px 0): at 160x120 every walker would otherwise be an impostor, and the reference is
+  // raw instancing of mesh triangles.
+  Result r = run("bench --walkers 6 --frames 4 --level auto --impostor-px 0 --render --width 160 --height 120 --json " +
+                 json.string());
   ASSERT_EQ(r.status, 0) << r.out;
   std::ifstream in(json);
   const nlohmann::json j = nlohmann::json::parse(in);
@@ -301,6 +304,44 @@ TEST(StrataBench, RenderPassAgainstRawInstancing) {
   EXPECT_GT(render["raw_instanced_triangles_per_second"].get<double>(), 0.0);
   EXPECT_GT(render["ratio"].get<double>(), 0.0);
   EXPECT_EQ(j["level_name"], "auto");
+}
+
+// The tiers report, small: every key, impostors within 2 KB a walker, the tiers adding up to the crowd.
+TEST(StrataReport, LodWritesTheTiersFigures) {
+  const fs::path json = scratch("lod.json");
+  Result r = run("report lod --counts 300 --frames 2 --quality-walkers 60 --pop-walkers 30 --pop-frames 6 "
+                 "--width 320 --height 180 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  for (const char* key : {"image_psnr_db", "image_mean_abs_error", "pop_mean_abs_error_max", "bake_seconds",
+                          "bytes_per_walker", "speed", "quality", "pop", "atlas"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_GT(j.at("bake_seconds").get<double>(), 0.0);
+  EXPECT_GT(j.at("image_psnr_db").get<double>(), 20.0);
+  const auto& bytes = j.at("bytes_per_walker");
+  EXPECT_LE(bytes.at("impostor").get<double>(), 2048.0);
+  EXPECT_GT(bytes.at("level2").get<double>(), 100.0 * bytes.at("impostor").get<double>());
+  const auto& run300 = j.at("speed").at(0);
+  EXPECT_EQ(run300.at("walkers"), 300);
+  EXPECT_GT(run300.at("fps").get<double>(), 0.0);
+  std::size_t sum = 0;
+  for (const auto& [tier, n] : run300.at("walkers_per_tier").items()) sum += n.get<std::size_t>();
+  EXPECT_EQ(sum, 300u);
+}
+
+TEST(StrataCrowd, ImpostorsOnlyForTheWalk) {
+  const fs::path out = scratch("impostor_crowd");
+  Result r = run("crowd --walkers 6 --frames 2 --level impostor --no-mp4 --table1-frames 0 --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(j.at("body_level_name"), "impostor");
+  EXPECT_EQ(j.at("lod_last_frame").at("impostor").get<std::size_t>() + j.at("lod_last_frame").at("culled").get<std::size_t>(), 6u);
+  EXPECT_GT(j.at("impostors_drawn_last_frame").get<std::size_t>(), 0u);
+  EXPECT_TRUE(j.contains("impostor_atlas"));
+  Result clip = run("crowd --walkers 2 --frames 1 --level impostor --motion clip --no-mp4 --out " + out.string());
+  EXPECT_EQ(clip.status, 1) << clip.out;
+  EXPECT_NE(clip.out.find("--level impostor"), std::string::npos) << clip.out;
+  EXPECT_NE(clip.out.find("plays a clip or a capture"), std::string::npos) << clip.out;
 }
 
 TEST(StrataReport, GaitWritesTheMeasuredTargets) {

@@ -51,7 +51,7 @@ TEST(Step, AWalkingFrameRunsItsStagesInOrderAndTimesEach) {
   // The profiler saw the same stages under the same names, in the script's order.
   std::vector<std::string> names;
   for (const SystemStats& s : profiler.stats()) names.push_back(s.name);
-  const std::vector<std::string> expected = {"locomotion", "ik", "fk", "muscle", "lod", "skin"};
+  const std::vector<std::string> expected = {"lod", "locomotion", "ik", "fk", "muscle", "skin"};
   EXPECT_EQ(names, expected);
 }
 

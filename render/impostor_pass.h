@@ -1,0 +1,41 @@
+#pragma once
+// The impostor pass: ImpostorBatch (render/body_source.h), far walkers drawn as one camera-facing quad each from
+// their rig's atlas (components/impostor_atlas.h) with impostor.vert/.frag. The atlas is uploaded once into two
+// mipmapped array textures (one layer per gait phase) and kept while batches point at the same atlas; per frame
+// only the six per-walker floats are streamed and drawn in one instanced call. Owned by the BodyPass, which
+// dispatches batches by kind.
+#include <cstdint>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "render/body_source.h"
+#include "render/gl_program.h"
+
+namespace strata {
+
+class ImpostorPass {
+ public:
+  // Needs a current GL 4.5 core context (as do draw and the destructor). Throws std::runtime_error on a shader
+  // failure.
+  ImpostorPass();
+  // Throws std::invalid_argument when a batch with walkers has no complete atlas or misses an array.
+  static void check(const ImpostorBatch& batch);
+  void draw(const ImpostorBatch& batch, const glm::mat4& view, const glm::mat4& projection);
+  std::size_t impostors_drawn() const { return drawn_; }
+  void reset_count() { drawn_ = 0; }
+
+ private:
+  void upload(const ImpostorAtlas& atlas);
+
+  GlObject program_, vao_, instances_;
+  // Per cell (phase-major, then elevation, then azimuth), the part of the cell the walker covers, as texture
+  // coordinates within the cell (x0, y0, x1, y1): quads are shrunk to it, which halves the fragments shaded.
+  GlObject cell_bounds_{GlKind::kBuffer};
+  GlObject color_{GlKind::kTexture2DArray}, normal_{GlKind::kTexture2DArray};
+  const ImpostorAtlas* uploaded_ = nullptr;  // the atlas the textures hold (address and key)
+  std::uint64_t uploaded_key_ = 0;
+  std::size_t drawn_ = 0;
+};
+
+}  // namespace strata

@@ -1,0 +1,217 @@
+// Impostors on a real headless GL (Mesa llvmpipe through EGL): the baked atlas holds the walker in every cell with
+// unit normals; an impostor drawn where a mesh walker stood looks like it; impostors sort by their baked depth
+// whatever order they are drawn in; a malformed batch is refused before the frame starts.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "io/hanim_loader.h"
+#include "render/crowd_renderer.h"
+#include "render/gl_context.h"
+#include "render/impostor_bake.h"
+#include "render/scene_draw.h"
+#include "rig/body_rig.h"
+#include "rig/muscle_binding.h"
+#include "scene/body_settings.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
+
+namespace strata {
+namespace {
+
+Rig default_rig() {
+  Rig rig = to_rig(load_default_humanoid());
+  rig.body = default_bound_body();
+  rig.muscles = default_muscle_rig();
+  return rig;
+}
+
+// Fewer phases and elevations than the default, for a bake of a second or two.
+ImpostorBakeOptions small_bake() {
+  ImpostorBakeOptions o;
+  o.layout.phases = 8;
+  o.layout.azimuths = 16;
+  o.layout.elevations = 2;
+  return o;
+}
+
+class ImpostorTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    try {
+      context_ = create_headless_gl_context().release();
+    } catch (const std::exception& e) {
+      context_ = nullptr;
+      return;
+    }
+    atlas_ = new ImpostorAtlas(bake_impostor_atlas(default_rig(), GaitStyle{}, small_bake()));
+  }
+  static void TearDownTestSuite() {
+    delete atlas_;
+    delete context_;
+    atlas_ = nullptr, context_ = nullptr;
+  }
+  void SetUp() override {
+    if (!context_) GTEST_SKIP() << "no headless GL";
+  }
+  static GlContext* context_;
+  static ImpostorAtlas* atlas_;
+};
+GlContext* ImpostorTest::context_ = nullptr;
+ImpostorAtlas* ImpostorTest::atlas_ = nullptr;
+
+TEST_F(ImpostorTest, EveryCellHoldsTheWalkerWithUnitNormals) {
+  const ImpostorAtlas& a = *atlas_;
+  ASSERT_TRUE(a.complete());
+  EXPECT_GT(a.bake_seconds, 0.0);
+  const ImpostorAtlasLayout& l = a.layout;
+  const int W = l.layer_width();
+  std::vector<int> width_of(static_cast<std::size_t>(l.azimuths));
+  std::size_t opaque = 0, unit = 0;
+  for (int k = 0; k < l.phases; ++k)
+    for (int e = 0; e < l.elevations; ++e)
+      for (int az = 0; az < l.azimuths; ++az) {
+        std::size_t covered = 0;
+        int x0 = l.cell_width, x1 = -1, y0 = l.cell_height, y1 = -1;
+        for (int y = 0; y < l.cell_height; ++y)
+          for (int x = 0; x < l.cell_width; ++x) {
+            const std::size_t i = static_cast<std::size_t>(k) * l.layer_bytes() +
+                                  (static_cast<std::size_t>(e * l.cell_height + y) * W + static_cast<std::size_t>(az * l.cell_width + x)) * 4;
+            if (a.color[i + 3] == 0) continue;
+            ++covered;
+            x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+            if (a.color[i + 3] == 255) {
+              const glm::vec3 n(a.normal_depth[i] / 127.5f - 1.0f, a.normal_depth[i + 1] / 127.5f - 1.0f,
+                                a.normal_depth[i + 2] / 127.5f - 1.0f);
+              ++opaque;
+              unit += std::abs(glm::length(n) - 1.0f) < 0.05f;
+            }
+          }
+        ASSERT_GT(covered, static_cast<std::size_t>(l.cell_width * l.cell_height) / 20) << "phase " << k << " cell " << az << "," << e;
+        // The walker never touches the cell's edge: the cell frames the whole body.
+        EXPECT_GT(x0, 0);
+        EXPECT_LT(x1, l.cell_width - 1);
+        EXPECT_GT(y0, 0);
+        EXPECT_LT(y1, l.cell_height - 1);
+        if (k == 0 && e == 0) width_of[static_cast<std::size_t>(az)] = x1 - x0;
+      }
+  // Texels where a limb's edge crosses the body average two normals over the multisamples and come out shorter;
+  // every other covered texel holds a unit normal.
+  EXPECT_GT(double(unit), 0.9 * double(opaque));
+  // At heel strike the legs are apart along the walk: seen from the side (azimuth 90 deg) the walker is wider
+  // than seen from the front.
+  EXPECT_GT(width_of[static_cast<std::size_t>(l.azimuths / 4)], width_of[0]);
+}
+
+double psnr(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  double se = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (i % 4 == 3) continue;
+    const double d = double(a[i]) - double(b[i]);
+    se += d * d, ++n;
+  }
+  return se > 0.0 ? 10.0 * std::log10(255.0 * 255.0 * double(n) / se) : 99.0;
+}
+
+// One walker about 90 px tall (just below the impostor threshold) drawn as its level-2 mesh and as an impostor,
+// from the same camera at the same gait phase.
+TEST_F(ImpostorTest, AnImpostorLooksLikeTheMeshItReplaces) {
+  const int width = 320, height = 240;
+  CrowdRenderer renderer(width, height);
+  auto make = [&](DetailLevel level) {
+    auto crowd = std::make_unique<Crowd>(default_rig());
+    set_detail_level(*crowd, level);
+    CrowdConfig config;
+    config.walkers = 1;
+    config.motion = MotionSource::Walk;
+    spawn_crowd(*crowd, config);
+    crowd->impostor_atlas = std::make_shared<const ImpostorAtlas>(*atlas_);
+    return crowd;
+  };
+  auto mesh = make(DetailLevel::mesh(2));
+  auto impostor = make(DetailLevel::impostor());
+  OrbitCamera camera;
+  camera.fov_y = 0.8f;
+  camera.pitch = 0.1f;
+  camera.yaw = 0.9f;
+  const float aspect = float(width) / float(height);
+  RenderScratch scratch;
+  Profiler profiler(1, false);
+  std::vector<std::uint8_t> a, b;
+  for (int f = 0; f < 5; ++f) {
+    for (Crowd* c : {mesh.get(), impostor.get()}) step(*c, 1.0f / 30.0f, profiler);
+    // Follow the walker, 5.5 m away: 240 / (2 tan 0.4) * 1.75 / 5.5 = 90 px.
+    const SoaTable& t = mesh->table(DetailSlot::Mesh2);
+    camera.target = glm::vec3(t.f32(kWalkerPlacement, 0)[0], 0.9f, t.f32(kWalkerPlacement, 2)[0]);
+    camera.distance = 5.5f;
+    render_frame(*mesh, renderer, camera, aspect, height, scratch);
+    renderer.read_rgba(a);
+    render_frame(*impostor, renderer, camera, aspect, height, scratch);
+    EXPECT_EQ(renderer.impostors_drawn(), 1u);
+    renderer.read_rgba(b);
+    EXPECT_GT(psnr(a, b), 30.0) << "frame " << f;
+  }
+  // And it is drawn: the impostor frame differs from an empty one where the walker stands.
+  auto empty = make(DetailLevel::impostor());
+  despawn(*empty, empty->world.entities()[0]);
+  step(*empty, 1.0f / 30.0f, profiler);
+  std::vector<std::uint8_t> c;
+  render_frame(*empty, renderer, camera, aspect, height, scratch);
+  renderer.read_rgba(c);
+  EXPECT_LT(psnr(b, c), 35.0);
+}
+
+// Two impostors, one behind the other: the same image whichever is drawn first (each writes its baked depth).
+TEST_F(ImpostorTest, ImpostorsSortByTheirBakedDepth) {
+  const int width = 160, height = 160;
+  CrowdRenderer renderer(width, height);
+  renderer.options().draw_ground = false;
+  const glm::mat4 projection = glm::perspective(glm::radians(40.0f), 1.0f, 0.1f, 100.0f);
+  const glm::mat4 view = glm::lookAt(glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.0f, 1.0f, -1.0f), glm::vec3(0, 1, 0));
+  auto draw = [&](bool near_first) {
+    // Near walker at z = -5 facing the camera, the far one 1 m behind it and 0.25 m to the side, side-on.
+    const float xs[2] = {0.0f, 0.25f}, zs[2] = {-5.0f, -6.0f}, headings[2] = {0.0f, 1.57f};
+    float x[2], y[2] = {0, 0}, z[2], heading[2], scale[2] = {1, 1}, phase[2] = {0.1f, 0.6f};
+    for (int i = 0; i < 2; ++i) {
+      const int j = near_first ? i : 1 - i;
+      x[i] = xs[j], z[i] = zs[j], heading[i] = headings[j];
+      phase[i] = j == 0 ? 0.1f : 0.6f;
+    }
+    ImpostorBatch batch{atlas_, x, y, z, heading, scale, phase, 2};
+    const std::vector<BodyBatch> batches = {batch};
+    renderer.render({}, view, projection, BodyBatches(batches));
+    std::vector<std::uint8_t> pixels;
+    renderer.read_rgba(pixels);
+    return pixels;
+  };
+  const std::vector<std::uint8_t> a = draw(true), b = draw(false);
+  EXPECT_EQ(a, b);
+  // Something is drawn in the middle (the near walker's body), unlike the clear colour in the corner.
+  const std::size_t centre = (static_cast<std::size_t>(height / 2) * width + width / 2) * 4;
+  EXPECT_NE(std::vector<std::uint8_t>(a.begin() + static_cast<std::ptrdiff_t>(centre), a.begin() + static_cast<std::ptrdiff_t>(centre) + 3),
+            std::vector<std::uint8_t>(a.begin(), a.begin() + 3));
+}
+
+TEST_F(ImpostorTest, AMalformedBatchIsRefusedBeforeTheFrame) {
+  CrowdRenderer renderer(64, 64);
+  float v[1] = {0.0f};
+  const glm::mat4 identity(1.0f);
+  ImpostorBatch no_atlas{nullptr, v, v, v, v, v, v, 1};
+  std::vector<BodyBatch> batches = {no_atlas};
+  EXPECT_THROW(renderer.render({}, identity, identity, BodyBatches(batches)), std::invalid_argument);
+  ImpostorBatch no_phase{atlas_, v, v, v, v, v, nullptr, 1};
+  batches = {no_phase};
+  EXPECT_THROW(renderer.render({}, identity, identity, BodyBatches(batches)), std::invalid_argument);
+  ImpostorBatch none{nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, 0};
+  batches = {none};
+  EXPECT_NO_THROW(renderer.render({}, identity, identity, BodyBatches(batches)));
+}
+
+}  // namespace
+}  // namespace strata
