@@ -74,6 +74,7 @@ void set_detail_level(Crowd& crowd, DetailLevel level) {
 void set_skinning_mode(Crowd& crowd, SkinningMode mode) {
   if (crowd.skin.mode == mode) return;
   crowd.skin.mode = mode;
+  crowd.impostor_atlas = nullptr;  // baked in the old mode
   rebuild_layouts(crowd);
 }
 
