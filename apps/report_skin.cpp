@@ -4,6 +4,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -18,6 +22,20 @@
 #include "io/hanim_loader.h"
 #include "rig/binding.h"
 #include "rig/body_generator.h"
+#include "rig/body_rig.h"
+#include "rig/cor_centres.h"
+#include "scene/body_settings.h"
+#include "scene/crowd.h"
+#include "scene/spawn.h"
+#include "scene/step.h"
+#include "systems/skin_kernel.h"
+#include "io/image_writer.h"
+#include "render/camera.h"
+#include "render/crowd_renderer.h"
+#include "render/gl_context.h"
+#include "scene/scene_setup.h"
+#include "systems/fk.h"
+#include "systems/pose_gather.h"
 #include "reference/skin_metrics.h"
 #include "reference/fk_reference.h"
 #include "reference/skin_reference.h"
@@ -27,6 +45,7 @@ namespace {
 
 struct SkinReportOptions {
   std::string json;
+  std::string images;  // directory for the modes figure; empty = none
   float seconds = 2.5f;  // of walking: two gait cycles at the default cadence
   float fps = 60.0f;
   bool automatic = true;
@@ -78,8 +97,201 @@ nlohmann::json quality_json(const Quality& q) {
           {"nan_count", q.nan_count}};
 }
 
+// One skinning mode on level 0 (three-step binding): what the targets read.
+struct ModeQuality {
+  double elbow_volume_change_pct = 0.0, knee_volume_change_pct = 0.0;
+  double twist90_area_ratio = 1.0, twist180_area_ratio = 1.0, twist_section_axial_m = 0.0;
+  double bulge_mm_max = 0.0;
+  std::size_t inverted_triangles_walk = 0;
+  double vertices_per_second = 0.0;
+};
+
+// Level 0 skinned by the kernel on one core, one walker in a walking pose, without muscles: seconds per call,
+// the best of several interleaved rounds per mode (interleaving spreads a shared machine's noise over every
+// mode alike; the best round is the one least disturbed).
+std::array<double, 3> kernel_seconds(const Rig& base) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  Rig rig = base;
+  rig.body = default_bound_body();
+  rig.muscles = nullptr;
+  std::array<std::unique_ptr<Crowd>, 3> scenes;
+  std::array<std::vector<float>, 3> outs;
+  std::array<SkinWalkerJob, 3> jobs;
+  for (std::size_t m = 0; m < 3; ++m) {
+    scenes[m] = std::make_unique<Crowd>(rig);
+    CrowdConfig config;
+    config.walkers = 1;
+    config.motion = MotionSource::Walk;
+    spawn_crowd(*scenes[m], config);
+    set_skinning_mode(*scenes[m], kSkinningModes[m]);
+    set_detail_level(*scenes[m], DetailLevel::mesh(0));
+    Profiler profiler(8, false);
+    for (int f = 0; f < 10; ++f) step(*scenes[m], 1.0f / 30.0f, profiler);
+    const SkinLayout& layout = current_layout(*scenes[m]);
+    const std::size_t padded = pad_to_lanes(layout.vertex_count);
+    outs[m].assign(6 * padded, 0.0f);
+    jobs[m] = make_skin_walker_job(layout, scenes[m]->table(initial_slot(*scenes[m])), 0,
+                                   skin_output_in(outs[m].data(), padded), kSkinningModes[m]);
+    if (!jobs[m].validate()) throw std::runtime_error("report skin: the timing job does not validate");
+  }
+  std::array<double, 3> best{1e30, 1e30, 1e30};
+  for (int round = 0; round < 7; ++round)
+    for (std::size_t m = 0; m < 3; ++m) {
+      const int calls = 200;
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int c = 0; c < calls; ++c) jobs[m].run();
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / calls;
+      best[m] = std::min(best[m], s);
+    }
+  return best;
+}
+
+ModeQuality measure_mode(const Rig& rig, const BodyLevel& level, SkinningMode mode, std::span<const glm::vec3> centres,
+                         const SkinReportOptions& o) {
+  ModeQuality q;
+  const Skeleton& s = rig.skeleton;
+  q.inverted_triangles_walk = measure_walk_skin(rig, level, o.seconds, o.fps, mode, centres).inverted_triangles;
+  const int elbow = s.find_joint("l_elbow"), wrist = s.find_joint("l_wrist");
+  const int knee = s.find_joint("l_knee"), ankle = s.find_joint("l_ankle");
+  if (elbow >= 0) {
+    q.elbow_volume_change_pct =
+        flexion_volume_change_pct(level.mesh, level.binding, s, elbow, 2.0944f, 0.08f, mode, centres);
+    if (wrist >= 0) {
+      q.bulge_mm_max = 1000.0 * flexion_bulge_m(level.mesh, level.binding, s, elbow, wrist, 2.0944f, 0.08f, mode, centres);
+      const TwistSection t90 = twist_section(level.mesh, level.binding, s, elbow, wrist, 1.5708f, mode, centres);
+      const TwistSection t180 = twist_section(level.mesh, level.binding, s, elbow, wrist, 3.14159f, mode, centres);
+      q.twist90_area_ratio = t90.area_ratio;
+      q.twist180_area_ratio = t180.area_ratio;
+      q.twist_section_axial_m = t180.axial_m;
+    }
+  }
+  if (knee >= 0) {
+    q.knee_volume_change_pct =
+        flexion_volume_change_pct(level.mesh, level.binding, s, knee, 2.0944f, 0.11f, mode, centres);
+    if (ankle >= 0)
+      q.bulge_mm_max = std::max(
+          q.bulge_mm_max, 1000.0 * flexion_bulge_m(level.mesh, level.binding, s, knee, ankle, 2.0944f, 0.11f, mode, centres));
+  }
+  return q;
+}
+
+// The `modes` object: linear blending, dual quaternions and centres of rotation side by side on level 0.
+// Its targets_met is its own (dqs and cor: volume within 5 %, twist 180 >= 0.9, no inversion over the walk, cost
+// <= 1.3x linear blending); the report's top-level targets_met keeps meaning the level table's.
+nlohmann::json modes_report(const Rig& rig, const BodyLevel& level, const SkinReportOptions& o) {
+  bool targets = true;
+  const CorCentres cor = compute_cor_centres(level.mesh, level.binding);  // uncached: its time is reported
+  const std::array<double, 3> seconds = kernel_seconds(rig);
+  nlohmann::json modes;
+  std::printf("\n%-5s %10s %9s %9s %9s %10s %9s %13s %9s\n", "mode", "elbow vol%", "knee vol%", "twist 90",
+              "twist 180", "bulge mm", "inverted", "M vertices/s", "cost/lbs");
+  for (std::size_t m = 0; m < 3; ++m) {
+    const SkinningMode mode = kSkinningModes[m];
+    ModeQuality q = measure_mode(rig, level, mode, cor.centres, o);
+    q.vertices_per_second = seconds[m] > 0.0 ? double(level.mesh.vertex_count()) / seconds[m] : 0.0;
+    const double cost = seconds[0] > 0.0 ? seconds[m] / seconds[0] : 0.0;
+    const bool ok = mode == SkinningMode::Linear ||
+                    (std::abs(q.elbow_volume_change_pct) <= 5.0 && std::abs(q.knee_volume_change_pct) <= 5.0 &&
+                     q.twist180_area_ratio >= 0.9 && q.inverted_triangles_walk == 0 && cost <= 1.3);
+    targets = targets && ok;
+    modes[skinning_mode_name(mode)] = {{"elbow_volume_change_pct", q.elbow_volume_change_pct},
+                                       {"knee_volume_change_pct", q.knee_volume_change_pct},
+                                       {"twist90_area_ratio", q.twist90_area_ratio},
+                                       {"twist180_area_ratio", q.twist180_area_ratio},
+                                       {"twist_section_axial_m", q.twist_section_axial_m},
+                                       {"bulge_mm_max", q.bulge_mm_max},
+                                       {"inverted_triangles_walk", q.inverted_triangles_walk},
+                                       {"vertices_per_second", q.vertices_per_second},
+                                       {"cost_vs_lbs", cost},
+                                       {"targets_met", ok}};
+    std::printf("%-5s %10.1f %9.1f %9.2f %9.2f %10.1f %9zu %13.0f %9.2f%s\n", skinning_mode_name(mode),
+                q.elbow_volume_change_pct, q.knee_volume_change_pct, q.twist90_area_ratio, q.twist180_area_ratio,
+                q.bulge_mm_max, q.inverted_triangles_walk, q.vertices_per_second / 1e6, cost, ok ? "" : "  MISSED");
+  }
+  modes["level"] = 0;
+  modes["targets_met"] = targets;
+  modes["kernel_isa"] = skin_kernel_isa_name(skin_kernel_isa());
+  modes["cor_precompute_seconds"] = cor.seconds;
+  modes["cor_vertices_solved"] = cor.solved;
+  modes["cor_vertices_fallback"] = cor.fallback;
+  std::printf("centres of rotation: %zu vertices, %zu kept at rest (no similar triangle), %.2f s to precompute; "
+              "kernel %s, one core\n",
+              cor.solved, cor.fallback, cor.seconds, skin_kernel_isa_name(skin_kernel_isa()));
+  return modes;
+}
+
+// The modes figure: one column per mode (lbs, dqs, cor); top row the left elbow flexed 120 deg, bottom row the
+// left forearm turned 180 deg about its own axis at the elbow; the arm raised 75 deg forward so both face the
+// camera. Level 0, no muscle layer (its bulge would mix into the comparison).
+void write_modes_figure(const std::filesystem::path& dir) {
+  constexpr int kPanel = 400;
+  constexpr float kDeg = 3.14159265f / 180.0f;
+  auto context = create_headless_gl_context();
+  CrowdRenderer renderer(kPanel, kPanel);
+  renderer.options().draw_skeleton = false;
+  renderer.options().draw_ground = false;
+  std::vector<std::uint8_t> image(std::size_t(3) * kPanel * 2 * kPanel * 4), pixels;
+  for (std::size_t m = 0; m < 3; ++m) {
+    SceneOptions so;
+    so.walkers = 1;
+    so.rest = true;
+    so.motion = "clip";
+    so.muscles = "none";
+    so.level = DetailLevel::mesh(0);
+    so.skinning = kSkinningModes[m];
+    std::unique_ptr<Crowd> scene = build_scene(so);
+    const Skeleton& s = scene->rig().skeleton;
+    const int shoulder = s.find_joint("l_shoulder"), elbow = s.find_joint("l_elbow"), wrist = s.find_joint("l_wrist");
+    if (shoulder < 0 || elbow < 0 || wrist < 0) throw std::runtime_error("report skin: the default rig has no left arm");
+    const WalkerLanes l = scene->lanes();
+    const float placement[5] = {0.0f, 0.0f, 0.0f, 0.0f, 1.0f};
+    for (int c = 0; c < 5; ++c) l.at(l.placement, c)[0] = placement[c];
+    const glm::vec3 axis = glm::normalize(s.centers[static_cast<std::size_t>(wrist)] - s.centers[static_cast<std::size_t>(elbow)]);
+    for (int row = 0; row < 2; ++row) {
+      for (std::uint32_t j = 0; j < l.joints; ++j)
+        for (int c = 0; c < 4; ++c) l.at(l.local_rotation, j * 4 + c)[0] = c == 3 ? 1.0f : 0.0f;
+      auto set = [&](int joint, const glm::quat& q) {
+        const float v[4] = {q.x, q.y, q.z, q.w};
+        for (int c = 0; c < 4; ++c) l.at(l.local_rotation, std::size_t(joint) * 4 + c)[0] = v[c];
+      };
+      set(shoulder, glm::angleAxis(-75.0f * kDeg, glm::vec3(1, 0, 0)));
+      set(elbow, row == 0 ? glm::angleAxis(-120.0f * kDeg, glm::vec3(1, 0, 0)) : glm::angleAxis(180.0f * kDeg, axis));
+      run_or_throw(make_fk_job(s, scene->table(initial_slot(*scene))), "fk");
+      SkinnedCrowd out;
+      run_or_throw(make_skin_job(current_layout(*scene), scene->table(initial_slot(*scene)), out, nullptr,
+                                 scene->skin.mode),
+                   "skin");
+      OrbitCamera camera;
+      camera.yaw = 1.75f;  // from the walker's left, a little behind, looking down on the raised arm
+      camera.pitch = 0.5f;
+      // Top: the bent arm, shoulder to fist; bottom: the straight arm out to the hand.
+      if (row == 0)
+        camera.frame_box_tight(glm::vec3(0.12f, 1.30f, -0.10f), glm::vec3(0.30f, 1.70f, 0.35f), 1.0f, 1.05f);
+      else
+        camera.frame_box_tight(glm::vec3(0.10f, 1.15f, -0.10f), glm::vec3(0.30f, 1.65f, 0.75f), 1.0f, 1.05f);
+      BodyDrawInput bodies;
+      bodies.triangles = current_layout(*scene).triangles;
+      bodies.px = out.px.data(), bodies.py = out.py.data(), bodies.pz = out.pz.data();
+      bodies.nx = out.nx.data(), bodies.ny = out.ny.data(), bodies.nz = out.nz.data();
+      bodies.stride = out.stride;
+      bodies.vertex_count = out.vertex_count;
+      bodies.walker_count = 1;
+      std::vector<glm::vec3> joints;
+      gather_joint_positions(scene->lanes(), joints);
+      SkeletonDrawInput input{&s, joints, 1};
+      renderer.render(input, camera.view(), camera.projection(1.0f), &bodies);
+      renderer.read_rgba(pixels);
+      for (int y = 0; y < kPanel; ++y)
+        std::copy_n(pixels.begin() + std::ptrdiff_t(y) * kPanel * 4, kPanel * 4,
+                    image.begin() + ((std::ptrdiff_t(row) * kPanel + y) * 3 * kPanel + std::ptrdiff_t(m) * kPanel) * 4);
+    }
+  }
+  std::filesystem::create_directories(dir);
+  write_image(dir / "skin_modes.png", 3 * kPanel, 2 * kPanel, 4, image);
+}
+
 int run_skin_report(const SkinReportOptions& o) {
-  if (!check_outputs("report skin", {{"--json", o.json}})) return kExitFailure;
+  if (!check_outputs("report skin", {{"--json", o.json}, {"--images", o.images, true}})) return kExitFailure;
   try {
     const Rig rig = to_rig(load_default_humanoid());
     const BodyLevels& levels = default_body();
@@ -130,10 +342,16 @@ int run_skin_report(const SkinReportOptions& o) {
       level_reports.push_back(j);
     }
     out["levels"] = level_reports;
+    {
+      const Mesh& mesh0 = levels.levels[0];
+      const BodyLevel level0{mesh0, bind_three_step(mesh0, rig.skeleton, default_binding_tables())};
+      out["modes"] = modes_report(rig, level0, o);
+    }
     out["cage"] = {{"vertices", levels.cage.vertex_count()}, {"triangles", levels.cage.triangle_count()}};
     out["walk_seconds"] = o.seconds;
     out["flexion_deg"] = 120;
     out["targets_met"] = targets;
+    if (!o.images.empty()) write_modes_figure(o.images);
     if (!o.json.empty()) write_json_file(o.json, out);
     std::printf("cage: %zu vertices, %zu triangles; targets %s\n", levels.cage.vertex_count(),
                 levels.cage.triangle_count(), targets ? "met" : "MISSED");
@@ -150,6 +368,8 @@ void add_skin_report(CLI::App& report, int& exit_code) {
   auto o = std::make_shared<SkinReportOptions>();
   auto* skin = report.add_subcommand("skin", "Measure the default body's levels, binding and skinning quality");
   skin->add_option("--json", o->json, "Write the report here");
+  skin->add_option("--images", o->images,
+                   "Write skin_modes.png here: the elbow at 120 deg and the forearm twisted 180 deg per skinning mode");
   skin->add_option("--seconds", o->seconds, "Seconds of walking measured")->capture_default_str()->check(positive_up_to(3600));
   skin->add_flag("!--no-automatic", o->automatic, "Skip the automatic (bone heat) binding comparison");
   skin->callback([o, &exit_code] { exit_code = run_skin_report(*o); });

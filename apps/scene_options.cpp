@@ -76,6 +76,7 @@ nlohmann::json scene_inputs_json(const SceneOptions& o) {
           {"mesh", file(o.mesh)},
           {"motion", file(o.motion)},  // null: walk when the skeleton can, else its clips
           {"muscles", o.muscles},
+          {"skinning", skinning_mode_name(o.skinning)},
           {"muscle_overrides", file(o.muscle_overrides)},
           {"binding_overrides", file(o.binding_overrides)}};
 }
@@ -125,6 +126,18 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
                  "Under --level auto, walkers shorter than this many pixels on screen are drawn as impostors "
                  "(0 = none)")
       ->capture_default_str()->check(finite_in(0, 100000));
+  const CLI::Validator skinning_mode(
+      [](std::string& value) -> std::string {
+        if (parse_skinning_mode(value)) return {};
+        return "must be lbs, dqs or cor, got '" + value + "'";
+      },
+      "lbs|dqs|cor");
+  cmd.add_option_function<std::string>(
+         "--skinning", [&o](const std::string& value) { o.skinning = *parse_skinning_mode(value); },
+         "How joints are blended: lbs (linear blend, the paper's), dqs (dual quaternions: no collapse at bent "
+         "or twisted joints), cor (optimised centres of rotation: no collapse, no bulge; precomputed once per "
+         "body and cached)")
+      ->check(skinning_mode)->default_str(skinning_mode_name(o.skinning));
   cmd.add_option("--muscles", o.muscles,
                  "Muscle layer: 'default' (the shipped 12 action lines, data/muscles.json), 'none', or a muscle "
                  "file (format: io/muscle_file.h)")->capture_default_str();

@@ -13,8 +13,8 @@ class App;
 
 namespace strata::cli {
 
-// Registers --walkers, --skeleton, --mesh, --motion, --clip, --rest, --seed, --spacing, --threads, --level, the
-// muscle options (--muscles, --muscle-gain, --muscle-overrides) and --binding-overrides on `cmd`.
+// Registers --walkers, --skeleton, --mesh, --motion, --clip, --rest, --seed, --spacing, --threads, --level,
+// --skinning, the muscle options (--muscles, --muscle-gain, --muscle-overrides) and --binding-overrides on `cmd`.
 // Also --max-input-mb (add_input_limit_option).
 void add_scene_options(CLI::App& cmd, SceneOptions& options);
 

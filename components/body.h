@@ -51,12 +51,40 @@ class SubdivSurfaceCache {
   mutable std::array<std::shared_ptr<const SubdivSurface>, 3> surfaces_{};
 };
 
+struct CorCentres;  // rig/cor_centres.h
+// Centres of rotation per level (index 0..2) and for the cage (index 3), computed on first use by
+// body_cor_centres() (rig/cor_centres.h): only a crowd skinned with SkinningMode::CentresOfRotation pays for
+// them. A copy starts empty, like SubdivSurfaceCache, so an edited binding never serves stale centres.
+class CorCentreCache {
+ public:
+  CorCentreCache() = default;
+  CorCentreCache(const CorCentreCache&) {}
+  CorCentreCache& operator=(const CorCentreCache&) {
+    std::lock_guard lock(mutex_);
+    centres_ = {};
+    return *this;
+  }
+  template <class Build>
+  std::shared_ptr<const CorCentres> get(std::size_t slot, Build&& build) const {
+    if (slot >= centres_.size()) throw std::invalid_argument("centres of rotation: no such level");
+    std::lock_guard lock(mutex_);
+    std::shared_ptr<const CorCentres>& c = centres_[slot];
+    if (!c) c = build();
+    return c;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  mutable std::array<std::shared_ptr<const CorCentres>, 4> centres_{};
+};
+
 struct Body {
   std::vector<BodyLevel> levels;
   // The low-resolution subdivision cage, bound like the levels; absent for imported bodies. Kept apart from
   // `levels` so level numbers 0..2 keep their meaning for reports and tests.
   std::optional<BodyLevel> cage = std::nullopt;
   SubdivSurfaceCache subdiv{};
+  CorCentreCache cor{};
 };
 
 }  // namespace strata

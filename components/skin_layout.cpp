@@ -104,4 +104,30 @@ void set_muscle_coefficients(SkinLayout& layout, std::span<const std::array<floa
   }
 }
 
+void set_cor_centres(SkinLayout& layout, std::span<const glm::vec3> centres) {
+  if (centres.size() != layout.vertex_count)
+    throw std::invalid_argument("set_cor_centres: one centre per layout vertex expected");
+  for (AlignedBuffer<float>* b : {&layout.cx, &layout.cy, &layout.cz}) b->reset(layout.vertex_count);
+  for (std::uint32_t i = 0; i < layout.vertex_count; ++i) {
+    const glm::vec3& c = centres[layout.original[i]];
+    layout.cx[i] = c.x;
+    layout.cy[i] = c.y;
+    layout.cz[i] = c.z;
+  }
+}
+
+const char* skinning_mode_name(SkinningMode mode) {
+  switch (mode) {
+    case SkinningMode::DualQuaternion: return "dqs";
+    case SkinningMode::CentresOfRotation: return "cor";
+    default: return "lbs";
+  }
+}
+
+std::optional<SkinningMode> parse_skinning_mode(std::string_view name) {
+  for (const SkinningMode m : kSkinningModes)
+    if (name == skinning_mode_name(m)) return m;
+  return std::nullopt;
+}
+
 }  // namespace strata

@@ -6,14 +6,35 @@
 // so the layout carries the triangle list renumbered to that order.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
+
+#include <glm/vec3.hpp>
 
 #include "components/body.h"
 #include "components/muscle.h"
 #include "ecs/aligned_buffer.h"
 
 namespace strata {
+
+// How a vertex's joint transforms are blended (docs/skin.md compares them):
+//   Linear            linear blend skinning, the paper's equation (4): blend the 3x4 matrices. Cheapest; the
+//                     blended matrix is not a rotation, so bent joints lose volume and twisted ones pinch (the
+//                     candy wrapper).
+//   DualQuaternion    Kavan et al. 2007/2008: blend unit dual quaternions (antipodality fixed), normalise. Always a
+//                     rigid transform, so no collapse; bends bulge a little outward.
+//   CentresOfRotation Le & Hodgins 2016: a per-vertex centre c precomputed from the similarity of weights; the
+//                     blended (normalised) quaternion R rotates about it, v' = R(v - c) + LBS(c). No candy wrapper,
+//                     no dual-quaternion bulge; needs the centres (SkinLayout::cx..cz).
+// One-influence vertices are a rigid transform in every mode, so every mode skins them the linear way.
+enum class SkinningMode : std::uint8_t { Linear, DualQuaternion, CentresOfRotation };
+inline constexpr std::array<SkinningMode, 3> kSkinningModes{SkinningMode::Linear, SkinningMode::DualQuaternion,
+                                                             SkinningMode::CentresOfRotation};
+// "lbs", "dqs", "cor": the names of --skinning and of report keys.
+const char* skinning_mode_name(SkinningMode mode);
+std::optional<SkinningMode> parse_skinning_mode(std::string_view name);
 
 struct SkinGroup {
   std::array<std::int16_t, kMaxInfluences> joints{};  // the group's influence set
@@ -36,8 +57,12 @@ struct SkinLayout {
   std::array<AlignedBuffer<float>, kMusclePointsPerVertex> muscle_coefficient;
   std::vector<std::uint32_t> muscle_slot;  // layout vertex -> index in the MuscleBinding, or kNoMuscle
   std::uint32_t muscle_points = 0;         // 1 + the largest control point index used (0: none)
+  // Centres of rotation (SkinningMode::CentresOfRotation), rest space, layout order; empty until
+  // set_cor_centres. Kept out of the linear layouts: level 0's take a precomputation (rig/cor_centres.h).
+  AlignedBuffer<float> cx, cy, cz;
   static constexpr std::uint32_t kNoMuscle = 0xffffffffu;
   bool has_muscles() const { return !muscle_slot.empty(); }
+  bool has_cor_centres() const { return vertex_count > 0 && cx.size() >= vertex_count; }
 };
 
 // Groups by influence set (weights renormalised to sum 1; zero-weight slots dropped), and, when `muscles` is
@@ -48,5 +73,9 @@ SkinLayout make_skin_layout(const BodyLevel& level, const MuscleBinding* muscles
 // Installs per-binding coefficients (muscle_coefficients(), one per bound vertex of the binding the layout was
 // made with). Called at start-up and whenever a force value is edited.
 void set_muscle_coefficients(SkinLayout& layout, std::span<const std::array<float, kMusclePointsPerVertex>> c);
+
+// Installs centres of rotation given per mesh vertex (mesh order, as rig/cor_centres.h computes them). Throws
+// std::invalid_argument when the count is not the layout's vertex count.
+void set_cor_centres(SkinLayout& layout, std::span<const glm::vec3> centres);
 
 }  // namespace strata

@@ -144,18 +144,137 @@ double joint_volume_change_pct(const Mesh& rest, std::span<const glm::vec3> pose
   return 100.0 * (after - before) / std::abs(before);
 }
 
-double flexion_volume_change_pct(const Mesh& rest, const SkinBinding& binding, const Skeleton& skeleton, int joint,
-                                 float angle_rad, float radius) {
+std::vector<glm::quat> flexion_rotations(const Skeleton& skeleton, int joint, float angle_rad) {
   if (joint < 0 || static_cast<std::size_t>(joint) >= skeleton.joint_count())
-    throw std::invalid_argument("flexion_volume_change_pct: joint out of range");
+    throw std::invalid_argument("flexion: joint out of range");
   const JointLimits& lim = skeleton.limits[joint];
   const float sign = lim.present && -lim.lower.x > lim.upper.x ? -1.0f : 1.0f;
   std::vector<glm::quat> rotations(skeleton.joint_count(), glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
   rotations[joint] = glm::angleAxis(sign * angle_rad, glm::vec3(1.0f, 0.0f, 0.0f));
-  const ReferencePose pose = fk_reference(skeleton, rotations, glm::vec3(0.0f));
-  const SkinnedVertices posed = skin_reference(rest, binding, pose.skinning);
+  return rotations;
+}
+
+double flexion_volume_change_pct(const Mesh& rest, const SkinBinding& binding, const Skeleton& skeleton, int joint,
+                                 float angle_rad, float radius, SkinningMode mode, std::span<const glm::vec3> centres) {
+  const ReferencePose pose = fk_reference(skeleton, flexion_rotations(skeleton, joint, angle_rad), glm::vec3(0.0f));
+  const SkinnedVertices posed = skin_reference(rest, binding, pose.skinning, mode, centres);
   return joint_volume_change_pct(rest, posed.positions, skeleton.centers[joint], glm::vec3(pose.world[joint][3]),
                                  radius);
+}
+
+namespace {
+
+double segment_distance(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b) {
+  const glm::dvec3 ab = b - a;
+  const double len2 = glm::dot(ab, ab);
+  const double t = len2 > 0.0 ? std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+  return glm::length(p - (a + t * ab));
+}
+
+double weight_of(const SkinBinding& binding, std::size_t v, int joint) {
+  double w = 0.0, total = 0.0;
+  for (int k = 0; k < kMaxInfluences; ++k) {
+    if (!(binding.weights[v][k] > 0.0f)) continue;
+    total += binding.weights[v][k];
+    if (binding.joints[v][k] == joint) w += binding.weights[v][k];
+  }
+  return total > 0.0 ? w / total : 0.0;
+}
+
+bool bound_only_to(const SkinBinding& binding, std::size_t v, int a, int b) {
+  for (int k = 0; k < kMaxInfluences; ++k)
+    if (binding.weights[v][k] > 0.0f && binding.joints[v][k] != a && binding.joints[v][k] != b) return false;
+  return true;
+}
+
+// Signed area of the closed cut of `tris` (vertex positions `p`) by the plane through `o` across `axis`.
+double section_area(const Mesh& mesh, std::span<const glm::vec3> p, const std::vector<std::size_t>& tris,
+                    const glm::dvec3& o, const glm::dvec3& axis) {
+  double area = 0.0;
+  for (const std::size_t t : tris) {
+    const glm::dvec3 v[3] = {glm::dvec3(p[mesh.triangles[t]]), glm::dvec3(p[mesh.triangles[t + 1]]),
+                             glm::dvec3(p[mesh.triangles[t + 2]])};
+    double d[3];
+    for (int k = 0; k < 3; ++k) d[k] = glm::dot(v[k] - o, axis);
+    glm::dvec3 q[2];
+    int found = 0;
+    for (int k = 0; k < 3 && found < 2; ++k) {
+      const int l = (k + 1) % 3;
+      if ((d[k] < 0.0) == (d[l] < 0.0)) continue;  // this edge does not cross (a vertex on the plane counts as +)
+      q[found++] = v[k] + (d[k] / (d[k] - d[l])) * (v[l] - v[k]);
+    }
+    if (found < 2) continue;
+    // Counter-clockwise seen from +axis: the outward normal of the cut, cross(segment, axis), agrees with the
+    // triangle's.
+    const glm::dvec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
+    if (glm::dot(glm::cross(q[1] - q[0], axis), n) < 0.0) std::swap(q[0], q[1]);
+    area += 0.5 * glm::dot(axis, glm::cross(q[0] - o, q[1] - o));
+  }
+  return area;
+}
+
+}  // namespace
+
+double flexion_bulge_m(const Mesh& rest, const SkinBinding& binding, const Skeleton& skeleton, int joint, int child,
+                       float angle_rad, float radius, SkinningMode mode, std::span<const glm::vec3> centres) {
+  if (child < 0 || static_cast<std::size_t>(child) >= skeleton.joint_count())
+    throw std::invalid_argument("flexion_bulge_m: child joint out of range");
+  const int parent = skeleton.parents[static_cast<std::size_t>(joint)];
+  if (parent < 0) throw std::invalid_argument("flexion_bulge_m: the joint has no parent bone");
+  const ReferencePose pose = fk_reference(skeleton, flexion_rotations(skeleton, joint, angle_rad), glm::vec3(0.0f));
+  const SkinnedVertices posed = skin_reference(rest, binding, pose.skinning, mode, centres);
+  const glm::dvec3 rp(skeleton.centers[static_cast<std::size_t>(parent)]), rj(skeleton.centers[static_cast<std::size_t>(joint)]),
+      rc(skeleton.centers[static_cast<std::size_t>(child)]);
+  const glm::dvec3 pp(pose.world[static_cast<std::size_t>(parent)][3]), pj(pose.world[static_cast<std::size_t>(joint)][3]),
+      pc(pose.world[static_cast<std::size_t>(child)][3]);
+  double bulge = 0.0;
+  for (std::size_t v = 0; v < rest.vertex_count(); ++v) {
+    const glm::dvec3 r(rest.positions[v]);
+    if (glm::length(r - rj) > radius) continue;
+    const double before = std::min(segment_distance(r, rp, rj), segment_distance(r, rj, rc));
+    const glm::dvec3 q(posed.positions[v]);
+    const double after = std::min(segment_distance(q, pp, pj), segment_distance(q, pj, pc));
+    bulge = std::max(bulge, after - before);
+  }
+  return bulge;
+}
+
+TwistSection twist_section(const Mesh& rest, const SkinBinding& binding, const Skeleton& skeleton, int joint,
+                           int child, float angle_rad, SkinningMode mode, std::span<const glm::vec3> centres) {
+  if (joint < 0 || child < 0 || static_cast<std::size_t>(std::max(joint, child)) >= skeleton.joint_count())
+    throw std::invalid_argument("twist_section: joint out of range");
+  const int parent = skeleton.parents[static_cast<std::size_t>(joint)];
+  const glm::dvec3 o(skeleton.centers[static_cast<std::size_t>(joint)]);
+  const glm::dvec3 axis = glm::normalize(glm::dvec3(skeleton.centers[static_cast<std::size_t>(child)]) - o);
+  // The blend zone's middle along the axis.
+  double num = 0.0, den = 0.0;
+  for (std::size_t v = 0; v < rest.vertex_count(); ++v) {
+    if (!bound_only_to(binding, v, joint, parent)) continue;
+    const double w = weight_of(binding, v, joint);
+    const double m = std::min(w, 1.0 - w);
+    if (m <= 0.0) continue;
+    num += m * glm::dot(glm::dvec3(rest.positions[v]) - o, axis);
+    den += m;
+  }
+  TwistSection out;
+  if (!(den > 0.0)) return out;  // nothing blended: nothing to twist
+  out.axial_m = num / den;
+  const glm::dvec3 centre = o + out.axial_m * axis;
+  std::vector<std::size_t> tris;
+  for (std::size_t t = 0; t + 2 < rest.triangles.size(); t += 3) {
+    bool limb = true;
+    for (int k = 0; k < 3; ++k) limb = limb && bound_only_to(binding, rest.triangles[t + k], joint, parent);
+    if (limb) tris.push_back(t);
+  }
+  // Rest rotations are identity, so the axis in the joint's local frame is the world axis; the joint stays put.
+  std::vector<glm::quat> rotations(skeleton.joint_count(), glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+  rotations[static_cast<std::size_t>(joint)] = glm::angleAxis(angle_rad, glm::vec3(axis));
+  const ReferencePose pose = fk_reference(skeleton, rotations, glm::vec3(0.0f));
+  const SkinnedVertices posed = skin_reference(rest, binding, pose.skinning, mode, centres);
+  out.rest_area_m2 = section_area(rest, rest.positions, tris, centre, axis);
+  out.posed_area_m2 = section_area(rest, posed.positions, tris, centre, axis);
+  out.area_ratio = out.rest_area_m2 > 0.0 ? out.posed_area_m2 / out.rest_area_m2 : 1.0;
+  return out;
 }
 
 }  // namespace strata

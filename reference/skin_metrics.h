@@ -5,11 +5,13 @@
 #include <span>
 #include <vector>
 
+#include <glm/gtc/quaternion.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 #include "components/mesh.h"
 #include "components/skeleton.h"
+#include "components/skin_layout.h"
 
 namespace strata {
 
@@ -50,7 +52,34 @@ double joint_volume_change_pct(const Mesh& rest, std::span<const glm::vec3> pose
 // The report's elbow/knee number: bends `joint` alone by `angle_rad` about its local x axis in the direction its
 // limits allow more of (elbows flex negative, knees positive in H-Anim), skins with the reference skinning and
 // returns joint_volume_change_pct about the joint with `radius`.
+// In any skinning mode (centres: per mesh vertex, for CentresOfRotation).
 double flexion_volume_change_pct(const Mesh& rest, const SkinBinding& binding, const Skeleton& skeleton, int joint,
-                                 float angle_rad, float radius);
+                                 float angle_rad, float radius, SkinningMode mode = SkinningMode::Linear,
+                                 std::span<const glm::vec3> centres = {});
+
+// The pose of that flexion: local rotations with `joint` bent by angle_rad the way its limits allow more of.
+std::vector<glm::quat> flexion_rotations(const Skeleton& skeleton, int joint, float angle_rad);
+
+// Bulge: after the flexion of `joint` by angle_rad, the largest amount (m) by which a vertex within `radius` of
+// the joint (at rest) lies farther from the posed bones than it lay from the rest bones. The bones are the
+// segments parent joint -> joint and joint -> `child`. A vertex that moves rigidly with either bone can only
+// come closer to the pair, so what exceeds rest is skin pushed outward (the dual-quaternion bulge).
+double flexion_bulge_m(const Mesh& rest, const SkinBinding& binding, const Skeleton& skeleton, int joint, int child,
+                       float angle_rad, float radius, SkinningMode mode = SkinningMode::Linear,
+                       std::span<const glm::vec3> centres = {});
+
+// Twist: the cross-section area of a limb turned by angle_rad about the axis joint -> child at `joint`, against
+// rest. The section is the plane across that axis through the middle of the limb's blend zone (the mean axial
+// position of the vertices `joint` shares with its parent, weighted by min(w, 1 - w)), cut through the
+// triangles of vertices bound only to `joint` and its parent; its area is that of the closed cut, oriented by
+// the posed triangles. 1 = the limb keeps its girth; linear blending's candy wrapper drives it towards 0.
+struct TwistSection {
+  double area_ratio = 1.0;
+  double rest_area_m2 = 0.0, posed_area_m2 = 0.0;
+  double axial_m = 0.0;  // where the section lies along the axis from the joint
+};
+TwistSection twist_section(const Mesh& rest, const SkinBinding& binding, const Skeleton& skeleton, int joint,
+                           int child, float angle_rad, SkinningMode mode = SkinningMode::Linear,
+                           std::span<const glm::vec3> centres = {});
 
 }  // namespace strata

@@ -4,7 +4,11 @@
 #include <stdexcept>
 #include <string>
 
+#include <algorithm>
+#include <array>
+
 #include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
 #include <glm/mat3x3.hpp>
 
 namespace strata {
@@ -108,6 +112,90 @@ SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, con
                                std::size_t walker) {
   const std::vector<glm::mat4> matrices = walker_skinning_matrices(lanes, walker);
   return skin_reference(rest, binding, matrices);
+}
+
+namespace {
+
+// Rotation of an (orthonormal up to float noise) skinning matrix as a unit quaternion; the identity for a matrix
+// that has none (zero), so no NaN leaves.
+glm::dquat rotation_of(const glm::dmat4& m) {
+  glm::dquat q = glm::quat_cast(glm::dmat3(m));
+  const double len = glm::length(q);
+  if (!(len > 1e-12) || !std::isfinite(len)) return glm::dquat(1.0, 0.0, 0.0, 0.0);
+  return q / len;
+}
+
+}  // namespace
+
+SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std::span<const glm::mat4> skinning,
+                               SkinningMode mode, std::span<const glm::vec3> centres) {
+  SkinnedVertices out = skin_reference(rest, binding, skinning);  // linear, and the checks
+  if (mode == SkinningMode::Linear) return out;
+  const std::size_t n = rest.vertex_count();
+  if (mode == SkinningMode::CentresOfRotation && centres.size() != n)
+    throw std::invalid_argument("skin_reference: centres of rotation need one centre per vertex");
+  std::vector<glm::vec3> computed;
+  const std::vector<glm::vec3>* rest_normals = &rest.normals;
+  if (rest.normals.size() != n) {
+    Mesh copy = rest;
+    compute_normals(copy);
+    computed = std::move(copy.normals);
+    rest_normals = &computed;
+  }
+  std::vector<glm::dquat> rot(skinning.size());
+  for (std::size_t j = 0; j < skinning.size(); ++j) rot[j] = rotation_of(glm::dmat4(skinning[j]));
+  for (std::size_t v = 0; v < n; ++v) {
+    std::array<std::pair<int, double>, kMaxInfluences> inf{};
+    int count = 0;
+    double total = 0.0;
+    for (int k = 0; k < kMaxInfluences; ++k)
+      if (binding.weights[v][k] > 0.0f) {
+        inf[static_cast<std::size_t>(count++)] = {binding.joints[v][k], binding.weights[v][k]};
+        total += binding.weights[v][k];
+      }
+    if (count < 2) continue;  // rigid: the linear result is exact
+    std::sort(inf.begin(), inf.begin() + count);
+    const glm::dquat q0 = rot[static_cast<std::size_t>(inf[0].first)];
+    glm::dquat real(0.0, 0.0, 0.0, 0.0), dual(0.0, 0.0, 0.0, 0.0);
+    glm::dmat4 blended(0.0);
+    for (int k = 0; k < count; ++k) {
+      const auto j = static_cast<std::size_t>(inf[static_cast<std::size_t>(k)].first);
+      const double w = inf[static_cast<std::size_t>(k)].second / total;
+      const glm::dmat4 m(skinning[j]);
+      const double sign = glm::dot(rot[j], q0) < 0.0 ? -1.0 : 1.0;
+      const glm::dquat t(0.0, m[3][0], m[3][1], m[3][2]);
+      real += (w * sign) * rot[j];
+      dual += (w * sign) * (0.5 * (t * rot[j]));
+      blended += w * m;
+    }
+    const double len = glm::length(real);  // >= the first joint's weight: the others are aligned with it
+    const glm::dquat r = real / len;
+    const glm::dmat3 R = glm::mat3_cast(r);
+    const glm::dvec3 p(rest.positions[v]);
+    glm::dvec3 posed;
+    if (mode == SkinningMode::DualQuaternion) {
+      const glm::dquat d = dual / len;
+      const glm::dquat tq = 2.0 * (d * glm::conjugate(r));
+      posed = R * p + glm::dvec3(tq.x, tq.y, tq.z);
+    } else {
+      const glm::dvec3 c(centres[v]);
+      posed = R * (p - c) + glm::dvec3(blended * glm::dvec4(c, 1.0));
+    }
+    out.positions[v] = glm::vec3(posed);
+    const glm::dvec3 nrm = R * glm::dvec3((*rest_normals)[v]);
+    const double nlen = glm::length(nrm);
+    out.normals[v] = nlen > 1e-12 && std::isfinite(nlen) ? glm::vec3(nrm / nlen) : (*rest_normals)[v];
+  }
+  return out;
+}
+
+SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std::span<const glm::mat4> skinning,
+                               SkinningMode mode, std::span<const glm::vec3> centres, const MuscleReference& muscles) {
+  SkinnedVertices out = skin_reference(rest, binding, skinning, mode, centres);
+  const std::vector<double> d = muscle_displacement_reference(rest.vertex_count(), muscles);
+  for (std::size_t v = 0; v < d.size(); ++v)
+    out.positions[v] = glm::vec3(glm::dvec3(out.positions[v]) + d[v] * glm::dvec3(out.normals[v]));
+  return out;
 }
 
 }  // namespace strata

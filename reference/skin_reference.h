@@ -11,6 +11,7 @@
 
 #include "components/mesh.h"
 #include "components/muscle.h"
+#include "components/skin_layout.h"
 #include "components/walker.h"
 
 namespace strata {
@@ -27,6 +28,16 @@ struct SkinnedVertices {
 // the identity pose to the rest mesh bit for bit. Throws std::invalid_argument when the binding's vertex count
 // differs from the mesh's or a joint index is outside `skinning`.
 SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std::span<const glm::mat4> skinning);
+// The same in any SkinningMode, in double, one vertex at a time: the twin of every kernel mode.
+//   DualQuaternion: each S_j's rotation as a unit quaternion (its translation as the dual part), the vertex's
+//     dual quaternions aligned in sign with its lowest-numbered joint's, blended, normalised; v' = R v + t,
+//     n' = R n.
+//   CentresOfRotation: R the normalised sign-aligned blend of the rotations, c the vertex's centre (`centres`,
+//     per mesh vertex, rig/cor_centres.h); v' = R (v - c) + sum_i w_i S_j c, n' = R n.
+// Vertices with one influence are the rigid S_j v in every mode. Throws std::invalid_argument when
+// CentresOfRotation gets no centre per vertex.
+SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std::span<const glm::mat4> skinning,
+                               SkinningMode mode, std::span<const glm::vec3> centres = {});
 // The same with the skinning matrices of walker `walker` read from its lanes (3x4 column-major, walker.h).
 SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, const WalkerLanes& lanes,
                                std::size_t walker);
@@ -41,6 +52,9 @@ struct MuscleReference {
 };
 SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std::span<const glm::mat4> skinning,
                                const MuscleReference& muscles);
+// The same in any SkinningMode (below).
+SkinnedVertices skin_reference(const Mesh& rest, const SkinBinding& binding, std::span<const glm::mat4> skinning,
+                               SkinningMode mode, std::span<const glm::vec3> centres, const MuscleReference& muscles);
 // The muscle displacement of every mesh vertex (0 for unbound ones), humanoid metres.
 std::vector<double> muscle_displacement_reference(std::size_t vertex_count, const MuscleReference& muscles);
 // The force factors of walker `walker` from its lanes.

@@ -13,7 +13,8 @@
 
 namespace strata {
 
-WalkSkinMetrics measure_walk_skin(const Rig& rig_template, const BodyLevel& level, float seconds, float fps) {
+WalkSkinMetrics measure_walk_skin(const Rig& rig_template, const BodyLevel& level, float seconds, float fps,
+                                  SkinningMode mode, std::span<const glm::vec3> centres) {
   Rig rig = rig_template;
   auto body = std::make_shared<Body>();
   body->levels.push_back(level);
@@ -32,7 +33,7 @@ WalkSkinMetrics measure_walk_skin(const Rig& rig_template, const BodyLevel& leve
   for (int f = 0; f < frames; ++f) {
     step(scene, 1.0f / fps, profiler);
     const std::vector<glm::mat4> skinning = walker_skinning_matrices(scene.lanes(), 0);
-    const SkinnedVertices posed = skin_reference(level.mesh, level.binding, skinning);
+    const SkinnedVertices posed = skin_reference(level.mesh, level.binding, skinning, mode, centres);
     const SkinMetrics m = measure_skin(level.mesh, level.binding, skinning, posed.positions);
     if (m.inverted_triangles > out.inverted_triangles) {
       out.inverted_triangles = m.inverted_triangles;

@@ -3,9 +3,13 @@
 // the report prints: one walker of the default crowd setup walks for `seconds`, and every frame its skin at one
 // body level is measured against the rest mesh (rig/skin_metrics.h), in humanoid space.
 #include <cstddef>
+#include <span>
+
+#include <glm/vec3.hpp>
 
 #include "components/body.h"
 #include "components/rig.h"
+#include "components/skin_layout.h"
 
 namespace strata {
 
@@ -19,6 +23,8 @@ struct WalkSkinMetrics {
 
 // `rig` provides the skeleton (its body, if any, is replaced by `level` alone). Throws std::invalid_argument when
 // the rig cannot walk (Crowd::walk_unavailable()).
-WalkSkinMetrics measure_walk_skin(const Rig& rig, const BodyLevel& level, float seconds, float fps);
+// `mode` skins with the reference in that mode (centres: per vertex of `level`, for CentresOfRotation).
+WalkSkinMetrics measure_walk_skin(const Rig& rig, const BodyLevel& level, float seconds, float fps,
+                                  SkinningMode mode = SkinningMode::Linear, std::span<const glm::vec3> centres = {});
 
 }  // namespace strata

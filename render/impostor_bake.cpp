@@ -109,6 +109,8 @@ std::uint64_t impostor_atlas_key(const Rig& rig, const GaitStyle& style, const I
     h.value(rig.muscles->set.point_count);
     for (const auto& line : rig.muscles->set.lines) h.bytes(line.name.data(), line.name.size());
   }
+  // Hashed only when not linear, so the linear atlases cached before skinning modes existed keep their key.
+  if (options.skinning != SkinningMode::Linear) h.value(options.skinning);
   h.value(style);
   const ImpostorAtlasLayout& l = options.layout;
   h.value(l.phases), h.value(l.azimuths), h.value(l.elevations), h.value(l.max_elevation_deg);
@@ -133,6 +135,7 @@ ImpostorAtlas bake_impostor_atlas(const Rig& rig, const GaitStyle& style, const 
   const int level = std::clamp(options.mesh_level, 0, static_cast<int>(rig.body->levels.size()) - 1);
   set_detail_level(crowd, DetailLevel::mesh(level));
   set_muscles_enabled(crowd, options.muscles);
+  set_skinning_mode(crowd, options.skinning);
   set_paths(crowd, make_stadium_lanes(glm::vec3(0.0f), 2000.0f, 10.0f, 1, 1.0f));
   const float stature = crowd.motion.locomotion->rig_height;
   const float cadence = cadence_for_speed(options.speed_m_s, stature);
@@ -321,6 +324,7 @@ const ImpostorAtlas* ensure_impostor_atlas(Crowd& crowd, const glm::vec3& skin_c
   ImpostorBakeOptions options;
   options.skin_color = skin_color;
   options.muscles = crowd.muscles_enabled();
+  options.skinning = crowd.skin.mode;
   // The crowd's mean lane speed, rounded to 0.1 m/s so crowds that differ a little share one cached atlas.
   double sum = 0.0;
   std::size_t n = 0;

@@ -21,6 +21,7 @@
 
 #include "components/impostor_atlas.h"
 #include "components/rig.h"
+#include "components/skin_layout.h"
 #include "systems/locomotion.h"
 
 namespace strata {
@@ -36,6 +37,7 @@ struct ImpostorBakeOptions {
   float speed_m_s = 1.2f;   // the walk baked
   glm::vec3 skin_color{0.80f, 0.62f, 0.52f};  // RenderOptions::skin_color
   bool muscles = true;      // with the rig's muscle layer when it has one
+  SkinningMode skinning = SkinningMode::Linear;  // the crowd's (scene/body_settings.h set_skinning_mode)
 };
 
 // The cache key of the atlas `options` would bake for `rig` walking with `style`.

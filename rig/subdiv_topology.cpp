@@ -1,5 +1,7 @@
 #include "rig/subdiv_topology.h"
 
+#include "rig/cor_centres.h"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -163,6 +165,9 @@ SubdivSurface make_subdiv_surface(const BodyLevel& cage, int depth, StencilForm 
   SubdivSurface s;
   s.depth = depth;
   s.cage_layout = make_skin_layout(cage);
+  // The cage is a few hundred vertices: its centres of rotation cost milliseconds, so every surface carries them
+  // and a crowd can switch to SkinningMode::CentresOfRotation at S levels without rebuilding shared data.
+  set_cor_centres(s.cage_layout, compute_cor_centres(cage.mesh, cage.binding).centres);
   s.steps = form == StencilForm::LevelByLevel ? level_by_level(*refiner, depth)
                                               : std::vector<SubdivStencils>{factorised(*refiner)};
   // The skinning kernel writes the cage in layout order: point the first step's sources there once, so the frame

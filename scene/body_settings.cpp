@@ -3,6 +3,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "rig/cor_centres.h"
 #include "rig/muscle_binding.h"
 #include "rig/subdiv_topology.h"
 
@@ -48,7 +49,10 @@ void rebuild_layouts(Crowd& crowd) {
   const std::size_t levels = std::min<std::size_t>(body.levels.size(), kMaxMeshLevels);
   for (std::size_t k = 0; k < levels; ++k) {
     const bool used = skin.level.is_automatic() || static_cast<int>(k) == skin.level.index();
-    if (used) skin.layouts[k] = make_skin_layout(body.levels[k], muscles ? &crowd.rig().muscles->levels[k] : nullptr);
+    if (!used) continue;
+    skin.layouts[k] = make_skin_layout(body.levels[k], muscles ? &crowd.rig().muscles->levels[k] : nullptr);
+    if (skin.mode == SkinningMode::CentresOfRotation)
+      set_cor_centres(skin.layouts[k], body_cor_centres(body, static_cast<int>(k))->centres);
   }
   rebuild_muscle_coefficients(crowd);
 }
@@ -65,6 +69,13 @@ void set_detail_level(Crowd& crowd, DetailLevel level) {
   // then culls and levels them again. A level switch is rare, so moving every walker is cheap enough.
   const std::uint32_t to = crowd.tables[slot_index(initial_slot(crowd))];
   for (const Entity walker : crowd.world.entities()) crowd.world.move(walker, to);
+}
+
+void set_skinning_mode(Crowd& crowd, SkinningMode mode) {
+  if (crowd.skin.mode == mode) return;
+  crowd.skin.mode = mode;
+  crowd.impostor_atlas = nullptr;  // baked in the old mode
+  rebuild_layouts(crowd);
 }
 
 void set_muscles_enabled(Crowd& crowd, bool on) {

@@ -18,6 +18,11 @@ void set_detail_level(Crowd& crowd, DetailLevel level);
 // Muscle layer on or off (on by default when the rig has one). Off skips the muscle stage and skins without
 // displacement (the layouts are rebuilt without muscle groups).
 void set_muscles_enabled(Crowd& crowd, bool on);
+// Picks how joints are blended (linear blending, dual quaternions, centres of rotation) for every level at run
+// time. CentresOfRotation installs the body's centres in the layouts in use (computed once per body level on
+// first request, cached on disk: rig/cor_centres.h), so the first switch to it may take a moment; later
+// switches and level changes reuse them.
+void set_skinning_mode(Crowd& crowd, SkinningMode mode);
 // Scales every muscle's forces at run time (the paper's users edited force values); only vertices bound to a
 // changed muscle move.
 void set_muscle_gains(Crowd& crowd, MuscleGains gains);

@@ -93,6 +93,8 @@ struct CrowdSkin {
   DetailLevel requested;  // what was asked for (set_detail_level)
   DetailLevel level = DetailLevel::none();  // what is used: requested, clamped to what the rig's body has
   bool muscles_on = true;
+  // How joints are blended (set_skinning_mode); at CentresOfRotation the layouts carry the body's centres.
+  SkinningMode mode = SkinningMode::Linear;
   MuscleGains gains;
   // Per mesh level in use, its vertex grouping (the skin kernel's input) with this crowd's muscle coefficients;
   // empty for the levels not in use.

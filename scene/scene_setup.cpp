@@ -138,7 +138,9 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   } else {
     throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");
   }
-  // The level first: under auto, walkers are spawned straight into the impostor table (scene/body_settings.h).
+  // The skinning mode before the level, so the layouts are built once, with their centres; the level before the
+  // walkers: under auto, walkers are spawned straight into the impostor table (scene/body_settings.h).
+  set_skinning_mode(*scene, o.skinning);
   set_detail_level(*scene, o.level);
   spawn_crowd(*scene, config);
   if (o.level.is_mesh() && scene->rig().body && static_cast<std::size_t>(o.level.index()) >= scene->rig().body->levels.size())

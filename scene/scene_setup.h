@@ -23,6 +23,7 @@ struct SceneOptions {
   float spacing = 1.25f;
   int threads = 0;       // 0 = all cores
   DetailLevel level;     // body resolution drawn (components/detail_level.h); default mesh level 0
+  SkinningMode skinning = SkinningMode::Linear;  // how joints are blended (components/skin_layout.h)
   std::string muscles = "default";  // "default" (data/muscles.json), "none", or a muscle file
   float muscle_gain = 1.0f;         // scales every muscle's forces
   std::string muscle_overrides;     // per-muscle gains file (io/muscle_file.h)

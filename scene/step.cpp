@@ -265,7 +265,7 @@ FrameProfile step(Crowd& crowd, float dt, Profiler& profiler) {
     StageTimer t(profiler, profile, Stage::Subdiv);  // cage skinning + refinement + normals
     SoaTable& table = crowd.table(DetailSlot::Refined);
     run_or_throw(make_subdiv_job(*skin.subdiv, table, crowd.skinned[slot_index(DetailSlot::Refined)],
-                                 crowd.muscles_enabled() ? &skin.cage_muscles : nullptr),
+                                 crowd.muscles_enabled() ? &skin.cage_muscles : nullptr, skin.mode),
                  "subdiv");
     counts[0] = table.size();
   } else if (!skin.level.is_none()) {
@@ -278,7 +278,8 @@ FrameProfile step(Crowd& crowd, float dt, Profiler& profiler) {
         out.walkers = 0;
         continue;
       }
-      run_or_throw(make_skin_job(skin.layouts[static_cast<std::size_t>(k)], table, out), "skin");
+      run_or_throw(make_skin_job(skin.layouts[static_cast<std::size_t>(k)], table, out, nullptr, skin.mode),
+                   "skin");
     }
     counts[3] = crowd.table(DetailSlot::Culled).size();
   }

@@ -25,6 +25,7 @@ void SkinnedCrowd::prepare(std::size_t n, std::size_t count, const std::vector<s
 bool SkinJob::validate() const {
   if (!layout || !out || !skin_columns_valid(skinning, placement, muscle_force)) return false;
   if (!skin_layout_fits(*layout, skinning.components / kAffineFloats, muscle_force.components)) return false;
+  if (!skin_mode_fits(*layout, mode)) return false;
   const std::size_t blocks = walkers ? walkers->size() : skinning.count;
   if (walkers) {
     for (const std::uint32_t w : *walkers)
@@ -46,7 +47,7 @@ bool SkinJob::run() const {
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t k = r.begin(); k < r.end(); ++k) {
                         const std::size_t w = walkers ? (*walkers)[k] : k;
-                        detail::skin_walker(*layout, skinning, placement, muscle_force, w, out->block(k));
+                        detail::skin_walker(*layout, skinning, placement, muscle_force, w, out->block(k), mode);
                       }
                     },
                     tbb::simple_partitioner());
@@ -54,10 +55,10 @@ bool SkinJob::run() const {
 }
 
 SkinJob make_skin_job(const SkinLayout& layout, const SoaTable& walkers, SkinnedCrowd& out,
-                      const std::vector<std::uint32_t>* subset) {
+                      const std::vector<std::uint32_t>* subset, SkinningMode mode) {
   out.prepare(layout.vertex_count, subset ? subset->size() : walkers.size(), subset);
   const SkinColumns c = skin_columns(walkers);
-  return {&layout, c.skinning, c.placement, c.muscle_force, subset, &out};
+  return {&layout, c.skinning, c.placement, c.muscle_force, subset, &out, mode};
 }
 
 bool SkinnedCrowd::bounds(glm::vec3& lo, glm::vec3& hi) const {

@@ -1,6 +1,6 @@
 #pragma once
 // Skin system: deforms every walker's body (one resolution level) by linear blend skinning, the paper's
-// equation (4), and places it in the world. Output is walker-major, ready for the renderer.
+// equation (4), or by dual quaternions or centres of rotation (SkinningMode), and places it in the world. Output is walker-major, ready for the renderer.
 //
 // Each walker goes through the vectorised kernel over the level's SkinLayout (systems/skin_kernel.h), walkers
 // in parallel. Determinism: every walker's output depends only on its own inputs, so any thread count gives
@@ -64,8 +64,9 @@ struct SkinJob {
   // Rows to skin, in the order their blocks are written (culling, per-walker levels); null: every row.
   const std::vector<std::uint32_t>* walkers = nullptr;
   SkinnedCrowd* out = nullptr;           // prepared for this layout and these walkers
+  SkinningMode mode = SkinningMode::Linear;  // CentresOfRotation needs the layout's centres
 
-  // The columns (skin_columns_valid) and layout fit; every listed row in range; `out` prepared: its vertex
+  // The columns (skin_columns_valid), layout and mode (skin_mode_fits) fit; every listed row in range; `out` prepared: its vertex
   // count and stride the layout's, one block per walker skinned, buffers that hold them, walker_ids as listed.
   bool validate() const;
   bool run() const;  // walkers in parallel, four per task
@@ -74,6 +75,6 @@ struct SkinJob {
 // A job over the walker table `walkers` that skins `subset` (null: all) into `out`, which it prepares (the only
 // allocation, and only when the crowd grew).
 SkinJob make_skin_job(const SkinLayout& layout, const SoaTable& walkers, SkinnedCrowd& out,
-                      const std::vector<std::uint32_t>* subset = nullptr);
+                      const std::vector<std::uint32_t>* subset = nullptr, SkinningMode mode = SkinningMode::Linear);
 
 }  // namespace strata

@@ -3,9 +3,13 @@
 // vectorised. Matrices are broadcast per influence group; per vertex it blends them with the vertex's weights
 // and transforms the rest position and normal (normals through the blended 3x3, renormalised).
 //
-// Runtime dispatch: the kernel is compiled twice (x86-64-v3, i.e. AVX2 + FMA, and the baseline x86-64 SSE2) and
-// picks the one the CPU runs on first use, so one binary is fast on AVX2 machines and still correct elsewhere.
-// systems/skin_reference.h is its scalar twin; tests hold both compiled bodies to it within 1e-5 m.
+// Three blending modes (SkinningMode, components/skin_layout.h): linear blending, dual quaternions, and optimised
+// centres of rotation; every mode fuses the muscle displacement the same way.
+//
+// Runtime dispatch: the kernel is compiled three times (x86-64-v4, i.e. AVX-512 at 16 lanes; x86-64-v3, i.e.
+// AVX2 + FMA; and the baseline x86-64 SSE2) and picks the best one the CPU runs on first use, so one binary is
+// fast on AVX2 and AVX-512 machines and still correct elsewhere. reference/skin_reference.h is its scalar twin;
+// tests hold every compiled body the CPU can run to it within 1e-5 m, in every mode.
 //
 //   SkinWalkerJob          reads:  layout (rest mesh, groups, weights, muscle coefficients), skinning
 //                                  (joints*12), placement (5), muscle_force (P, optional) of one walker
@@ -47,6 +51,8 @@ bool skin_columns_valid(const ColumnView<const float>& skinning, const ColumnVie
 // Whether `layout` can be skinned from `joints` joints and `muscle_points` force columns (0: none): groups inside
 // the vertex range with 1..4 influences on existing joints, muscle points within the columns when both have them.
 bool skin_layout_fits(const SkinLayout& layout, std::size_t joints, std::uint32_t muscle_points);
+// Whether `layout` can be skinned in `mode`: centres of rotation need the layout's centres.
+bool skin_mode_fits(const SkinLayout& layout, SkinningMode mode);
 
 // Skins one walker into world space, layout order. When the layout carries a muscle binding and muscle_force is
 // given, bound vertices then move along their skinned normal by the muscle displacement (scale * sum_i c_i
@@ -59,8 +65,10 @@ struct SkinWalkerJob {
   ColumnView<const float> muscle_force;  // force factor per control point, or empty: no displacement
   std::size_t walker = 0;                // row of the views
   SkinOutput out;
+  SkinningMode mode = SkinningMode::Linear;  // CentresOfRotation needs the layout's centres (set_cor_centres)
 
-  bool validate() const;  // the columns (skin_columns_valid), the layout fits them, walker in range, out holds it
+  // The columns (skin_columns_valid), the layout fits them and the mode, walker in range, out holds it.
+  bool validate() const;
   bool run() const;
 };
 
@@ -93,7 +101,7 @@ namespace detail {
 // The kernels behind the jobs, for jobs that validated their whole crowd once (skin, subdiv): no checks.
 void skin_walker(const SkinLayout& layout, const ColumnView<const float>& skinning,
                  const ColumnView<const float>& placement, const ColumnView<const float>& muscle_force,
-                 std::size_t w, const SkinOutput& out);
+                 std::size_t w, const SkinOutput& out, SkinningMode mode = SkinningMode::Linear);
 void apply_muscle_displacement(const MuscleDisplacementList& list, const ColumnView<const float>& placement,
                                const ColumnView<const float>& muscle_force, std::size_t w, const SkinOutput& out);
 }  // namespace detail
@@ -106,13 +114,15 @@ struct SkinColumns {
 SkinColumns skin_columns(const SoaTable& walkers);
 // The job for walker row `walker` of the walker table `walkers`.
 SkinWalkerJob make_skin_walker_job(const SkinLayout& layout, const SoaTable& walkers, std::size_t walker,
-                                   const SkinOutput& out);
+                                   const SkinOutput& out, SkinningMode mode = SkinningMode::Linear);
 
-enum class SkinKernelIsa { Auto, Avx2Fma, Portable };
-// Pins the body skin_walker uses (tests run both; Auto = what the CPU supports). Throws std::invalid_argument
-// for Avx2Fma on a CPU without it.
+enum class SkinKernelIsa { Auto, Avx2Fma, Portable, Avx512 };
+// Whether this CPU runs that body (Auto and Portable: always).
+bool skin_kernel_isa_supported(SkinKernelIsa isa);
+// Pins the body skin_walker uses (tests run each the CPU supports; Auto = the best the CPU supports). Throws
+// std::invalid_argument for Avx2Fma or Avx512 on a CPU without it.
 void force_skin_kernel_isa(SkinKernelIsa isa);
-// The body skin_walker runs now (never Auto), and its name ("avx2+fma", "sse2").
+// The body skin_walker runs now (never Auto), and its name ("avx512", "avx2+fma", "sse2").
 SkinKernelIsa skin_kernel_isa();
 const char* skin_kernel_isa_name(SkinKernelIsa isa);
 

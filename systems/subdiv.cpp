@@ -81,8 +81,9 @@ void ensure(AlignedBuffer<float>& b, std::size_t floats) {
 // Whether the surface, columns and muscle list of a job agree (SubdivWalkerJob and SubdivJob share it).
 bool subdiv_inputs_valid(const SubdivSurface* surface, const ColumnView<const float>& skinning,
                          const ColumnView<const float>& placement, const ColumnView<const float>& muscle_force,
-                         const MuscleDisplacementList* muscles) {
+                         const MuscleDisplacementList* muscles, SkinningMode mode) {
   if (!surface || surface->steps.empty() || !skin_columns_valid(skinning, placement, muscle_force)) return false;
+  if (!skin_mode_fits(surface->cage_layout, mode)) return false;
   if (!skin_layout_fits(surface->cage_layout, skinning.components / kAffineFloats, muscle_force.components))
     return false;
   // Each step reads the previous level (the cage first) and the last one gives the surface's vertices. The
@@ -111,12 +112,12 @@ bool subdiv_inputs_valid(const SubdivSurface* surface, const ColumnView<const fl
 // Walker `w` of a validated job.
 void subdiv_walker(const SubdivSurface& surface, const ColumnView<const float>& skinning,
                    const ColumnView<const float>& placement, const ColumnView<const float>& muscle_force,
-                   const MuscleDisplacementList* muscles, std::size_t w, const SkinOutput& out) {
+                   const MuscleDisplacementList* muscles, std::size_t w, const SkinOutput& out, SkinningMode mode) {
   thread_local SubdivScratch scratch;
   const std::size_t cage_stride = pad_to_lanes(surface.cage_layout.vertex_count);
   ensure(scratch.cage, 6 * cage_stride);
   const SkinOutput cage = skin_output_in(scratch.cage.data(), cage_stride);
-  detail::skin_walker(surface.cage_layout, skinning, placement, muscle_force, w, cage);
+  detail::skin_walker(surface.cage_layout, skinning, placement, muscle_force, w, cage, mode);
   if (muscles) detail::apply_muscle_displacement(*muscles, placement, muscle_force, w, cage);
   const float* sx = cage.px;
   const float* sy = cage.py;
@@ -139,18 +140,18 @@ void subdiv_walker(const SubdivSurface& surface, const ColumnView<const float>& 
 }  // namespace
 
 bool SubdivWalkerJob::validate() const {
-  return subdiv_inputs_valid(surface, skinning, placement, muscle_force, muscles) && walker < skinning.count &&
+  return subdiv_inputs_valid(surface, skinning, placement, muscle_force, muscles, mode) && walker < skinning.count &&
          out.holds(pad_to_lanes(surface->vertex_count));
 }
 
 bool SubdivWalkerJob::run() const {
   if (!validate()) return false;
-  subdiv_walker(*surface, skinning, placement, muscle_force, muscles, walker, out);
+  subdiv_walker(*surface, skinning, placement, muscle_force, muscles, walker, out, mode);
   return true;
 }
 
 bool SubdivJob::validate() const {
-  if (!out || !subdiv_inputs_valid(surface, skinning, placement, muscle_force, muscles)) return false;
+  if (!out || !subdiv_inputs_valid(surface, skinning, placement, muscle_force, muscles, mode)) return false;
   const std::size_t floats = out->stride * skinning.count;
   return out->vertex_count == surface->vertex_count && out->stride == pad_to_lanes(surface->vertex_count) &&
          out->walkers == skinning.count && out->walker_ids.empty() && out->px.size() >= floats &&
@@ -164,23 +165,24 @@ bool SubdivJob::run() const {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, skinning.count, 1),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t w = r.begin(); w < r.end(); ++w)
-                        subdiv_walker(*surface, skinning, placement, muscle_force, muscles, w, out->block(w));
+                        subdiv_walker(*surface, skinning, placement, muscle_force, muscles, w, out->block(w), mode);
                     },
                     tbb::simple_partitioner());
   return true;
 }
 
 SubdivWalkerJob make_subdiv_walker_job(const SubdivSurface& surface, const SoaTable& walkers, std::size_t walker,
-                                       const SkinOutput& out, const MuscleDisplacementList* muscles) {
+                                       const SkinOutput& out, const MuscleDisplacementList* muscles,
+                                       SkinningMode mode) {
   const SkinColumns c = skin_columns(walkers);
-  return {&surface, c.skinning, c.placement, c.muscle_force, muscles, walker, out};
+  return {&surface, c.skinning, c.placement, c.muscle_force, muscles, walker, out, mode};
 }
 
 SubdivJob make_subdiv_job(const SubdivSurface& surface, const SoaTable& walkers, SkinnedCrowd& out,
-                          const MuscleDisplacementList* muscles) {
+                          const MuscleDisplacementList* muscles, SkinningMode mode) {
   out.prepare(surface.vertex_count, walkers.size());
   const SkinColumns c = skin_columns(walkers);
-  return {&surface, c.skinning, c.placement, c.muscle_force, muscles, &out};
+  return {&surface, c.skinning, c.placement, c.muscle_force, muscles, &out, mode};
 }
 
 }  // namespace strata

@@ -45,6 +45,7 @@ struct SubdivWalkerJob {
   const MuscleDisplacementList* muscles = nullptr;
   std::size_t walker = 0;
   SkinOutput out;  // arrays of at least pad_to_lanes(surface->vertex_count) floats
+  SkinningMode mode = SkinningMode::Linear;  // how the cage is skinned (its layout carries centres of rotation)
 
   // Surface set with stencil steps ending at its vertex count; the columns and the cage layout fit; the muscle
   // list's points and vertices in range; walker in range; out holds the refined surface.
@@ -54,7 +55,8 @@ struct SubdivWalkerJob {
 
 // The job for walker row `walker` of the walker table `walkers`.
 SubdivWalkerJob make_subdiv_walker_job(const SubdivSurface& surface, const SoaTable& walkers, std::size_t walker,
-                                       const SkinOutput& out, const MuscleDisplacementList* muscles = nullptr);
+                                       const SkinOutput& out, const MuscleDisplacementList* muscles = nullptr,
+                                       SkinningMode mode = SkinningMode::Linear);
 
 // Every walker, in parallel, one block each.
 struct SubdivJob {
@@ -64,6 +66,7 @@ struct SubdivJob {
   ColumnView<const float> muscle_force;
   const MuscleDisplacementList* muscles = nullptr;
   SkinnedCrowd* out = nullptr;  // prepared: surface->vertex_count vertices, one block per row, no walker_ids
+  SkinningMode mode = SkinningMode::Linear;
 
   bool validate() const;
   bool run() const;
@@ -71,6 +74,6 @@ struct SubdivJob {
 
 // A job over every walker of `walkers` into `out`, which it prepares (the only allocation).
 SubdivJob make_subdiv_job(const SubdivSurface& surface, const SoaTable& walkers, SkinnedCrowd& out,
-                          const MuscleDisplacementList* muscles = nullptr);
+                          const MuscleDisplacementList* muscles = nullptr, SkinningMode mode = SkinningMode::Linear);
 
 }  // namespace strata

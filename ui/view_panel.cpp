@@ -74,6 +74,14 @@ std::string level_label(const Crowd& scene, DetailLevel level) {
   return label;
 }
 
+const char* skinning_mode_label(SkinningMode mode) {
+  switch (mode) {
+    case SkinningMode::DualQuaternion: return "dqs (dual quaternions)";
+    case SkinningMode::CentresOfRotation: return "cor (centres of rotation)";
+    default: return "lbs (linear blend)";
+  }
+}
+
 void playback_section(ViewPanelState& s, UiProbe* probe) {
   if (ImGui::Button(s.paused ? "Resume" : "Pause", ImVec2(80, 0))) s.paused = !s.paused;
   note(probe, "Pause");
@@ -123,6 +131,19 @@ void level_section(Crowd& scene, UiProbe* probe) {
     ImGui::EndCombo();
   }
   note(probe, "level");
+  // Skinning mode: every level at once. The first switch to centres of rotation may pause for the body's
+  // precomputation (then cached on disk).
+  const SkinningMode mode = scene.skin.mode;
+  if (ImGui::BeginCombo("skinning", skinning_mode_label(mode))) {
+    for (const SkinningMode m : kSkinningModes) {
+      const bool selected = m == mode;
+      if (ImGui::Selectable(skinning_mode_label(m), selected) && !selected) set_skinning_mode(scene, m);
+      note(probe, std::string("skinning:") + skinning_mode_name(m));
+      if (selected) ImGui::SetItemDefaultFocus();
+    }
+    ImGui::EndCombo();
+  }
+  note(probe, "skinning");
   LodPolicy& policy = scene.lod.policy;
   ImGui::BeginDisabled(current != DetailLevel::automatic());
   ImGui::SliderFloat("level 0 above", &policy.level0_px, 50.0f, 1000.0f, "%.0f px");

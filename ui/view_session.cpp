@@ -45,6 +45,7 @@ bool ViewSession::apply_crowd_request() {
   // What the user tuned at run time survives a new crowd; the crowd itself (count, seed) is what changes.
   built->lod.policy = scene_->lod.policy;
   built->motion.style = scene_->motion.style;
+  set_skinning_mode(*built, scene_->skin.mode);
   if (built->has_muscles()) {
     set_muscles_enabled(*built, scene_->muscles_enabled());
     set_muscle_gains(*built, scene_->skin.gains);

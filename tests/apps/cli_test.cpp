@@ -202,6 +202,34 @@ TEST(StrataReport, SkinWritesLevelsBindingAndQuality) {
               level.at("vertices").get<int>());
     EXPECT_LT(level.at("elbow_volume_change_pct").get<double>(), 0.0) << "linear blend skinning loses volume";
   }
+  // The three skinning modes side by side on level 0.
+  const auto& modes = j.at("modes");
+  for (const char* mode : {"lbs", "dqs", "cor"})
+    for (const char* key : {"elbow_volume_change_pct", "knee_volume_change_pct", "twist90_area_ratio",
+                            "twist180_area_ratio", "bulge_mm_max", "inverted_triangles_walk", "vertices_per_second"})
+      EXPECT_TRUE(modes.at(mode).contains(key)) << mode << " " << key;
+  EXPECT_LT(modes.at("lbs").at("twist180_area_ratio").get<double>(), 0.5) << "the candy wrapper";
+  for (const char* mode : {"dqs", "cor"}) {
+    EXPECT_GT(modes.at(mode).at("twist180_area_ratio").get<double>(), 0.9) << mode;
+    EXPECT_GT(modes.at(mode).at("elbow_volume_change_pct").get<double>(),
+              modes.at("lbs").at("elbow_volume_change_pct").get<double>() + 10.0)
+        << mode << " keeps more of the elbow's volume than linear blending";
+    EXPECT_GT(modes.at(mode).at("vertices_per_second").get<double>(), 0.0);
+  }
+}
+
+TEST(StrataCrowd, SkinningModeFlagDrawsEveryModeAndRefusesOthers) {
+  for (const char* mode : {"dqs", "cor"}) {
+    fs::path out = scratch(std::string("skinning_") + mode);
+    Result r = run(std::string("crowd --walkers 2 --frames 2 --width 96 --height 64 --level 1 --skinning ") + mode +
+                   " --no-progress --out " + out.string());
+    ASSERT_EQ(r.status, 0) << r.out;
+    nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+    EXPECT_EQ(summary.at("body_vertices"), 8923);
+  }
+  Result bad = run("crowd --skinning quaternions --frames 1 --no-progress --out " + scratch("skinning_bad").string());
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.out.find("--skinning"), std::string::npos) << bad.out;
 }
 
 TEST(StrataReport, MuscleWritesTheIssueKeysAndMeetsItsTargets) {

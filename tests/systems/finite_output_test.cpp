@@ -19,6 +19,7 @@
 #include "systems/ik.h"
 #include "systems/skin_kernel.h"
 #include "reference/skin_reference.h"
+#include "rig/cor_centres.h"
 #include "scene/body_settings.h"
 #include "scene/spawn.h"
 #include "scene/step.h"
@@ -114,8 +115,10 @@ TEST(FiniteOutputs, SkinningOnTenThousandExtremePoses) {
   config.walkers = 4;
   config.motion = MotionSource::Walk;
   spawn_crowd(scene, config);
+  set_skinning_mode(scene, SkinningMode::CentresOfRotation);  // the layout then carries centres: every mode runs on it
   set_detail_level(scene, DetailLevel::mesh(2));  // the coarsest level: the property is per vertex, the count only costs time
   const BodyLevel& body = rig.body->levels[2];
+  const std::vector<glm::vec3>& centres = body_cor_centres(*rig.body, 2)->centres;
   const SkinLayout& layout = current_layout(scene);
   const std::size_t padded = pad_to_lanes(layout.vertex_count);
   std::vector<float> out(6 * padded);
@@ -147,18 +150,25 @@ TEST(FiniteOutputs, SkinningOnTenThousandExtremePoses) {
       for (int c = 0; c < 6; ++c) ASSERT_TRUE(std::isfinite(lanes.at(lanes.muscle_frame, p * 6 + c)[w]));
     }
 
-    ASSERT_TRUE(make_skin_walker_job(layout, scene.table(initial_slot(scene)), w, soa).run());
-    for (std::size_t i = 0; i < layout.vertex_count; ++i)
-      ASSERT_TRUE(std::isfinite(soa.px[i]) && std::isfinite(soa.py[i]) && std::isfinite(soa.pz[i]) &&
-                  std::isfinite(soa.nx[i]) && std::isfinite(soa.ny[i]) && std::isfinite(soa.nz[i]))
-          << "kernel, trial " << trial << ", vertex " << i << ", scale " << lanes.placement[4 * s + w];
-    // The scalar twin on every tenth pose (it is ~20x slower and the same property).
-    if (trial % 10 == 0) {
-      const std::vector<float> force = walker_muscle_forces(lanes, w);
-      const MuscleReference muscles{&rig.muscles->set, &rig.muscles->levels[2], scene.skin.gains, force};
-      const SkinnedVertices ref = skin_reference(body.mesh, body.binding, walker_skinning_matrices(lanes, w), muscles);
-      for (std::size_t v = 0; v < ref.positions.size(); ++v)
-        ASSERT_TRUE(finite(ref.positions[v]) && finite(ref.normals[v])) << "reference, trial " << trial << ", vertex " << v;
+    // Every skinning mode: zero and far-from-unit joint quaternions reach the dual-quaternion and centre-of-rotation
+    // paths as degenerate skinning matrices.
+    for (const SkinningMode mode : kSkinningModes) {
+      ASSERT_TRUE(make_skin_walker_job(layout, scene.table(initial_slot(scene)), w, soa, mode).run());
+      for (std::size_t i = 0; i < layout.vertex_count; ++i)
+        ASSERT_TRUE(std::isfinite(soa.px[i]) && std::isfinite(soa.py[i]) && std::isfinite(soa.pz[i]) &&
+                    std::isfinite(soa.nx[i]) && std::isfinite(soa.ny[i]) && std::isfinite(soa.nz[i]))
+            << "kernel " << skinning_mode_name(mode) << ", trial " << trial << ", vertex " << i << ", scale "
+            << lanes.placement[4 * s + w];
+      // The scalar twin on every tenth pose (it is ~20x slower and the same property).
+      if (trial % 10 == 0) {
+        const std::vector<float> force = walker_muscle_forces(lanes, w);
+        const MuscleReference muscles{&rig.muscles->set, &rig.muscles->levels[2], scene.skin.gains, force};
+        const SkinnedVertices ref =
+            skin_reference(body.mesh, body.binding, walker_skinning_matrices(lanes, w), mode, centres, muscles);
+        for (std::size_t v = 0; v < ref.positions.size(); ++v)
+          ASSERT_TRUE(finite(ref.positions[v]) && finite(ref.normals[v]))
+              << "reference " << skinning_mode_name(mode) << ", trial " << trial << ", vertex " << v;
+      }
     }
   }
 }

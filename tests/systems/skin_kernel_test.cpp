@@ -4,6 +4,7 @@
 
 #include <random>
 #include <set>
+#include <tuple>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -18,7 +19,9 @@
 #include "systems/muscle.h"
 #include "systems/skin.h"
 #include "systems/skin_kernel.h"
+#include "reference/fk_reference.h"
 #include "reference/skin_reference.h"
+#include "rig/cor_centres.h"
 #include "scene/body_settings.h"
 #include "scene/spawn.h"
 #include "scene/step.h"
@@ -52,20 +55,25 @@ TEST(SkinLayout, GroupsCoverEveryVertexOnceAndTrianglesFollowTheRenumbering) {
   }
 }
 
-// Kernel vs reference (equation 4 plus the muscle displacement, evaluated from the binding in double) over
-// walking frames and random joint rotations, every level.
-// Both compiled bodies (AVX2 + FMA where the CPU has it, and the portable SSE2 one) are held to the twin.
-class SkinKernelIsaTest : public ::testing::TestWithParam<SkinKernelIsa> {
+// Kernel vs reference (equation 4, dual quaternions or centres of rotation, plus the muscle displacement
+// evaluated from the binding in double) over walking frames and random joint rotations, every level.
+// Every compiled body the CPU runs (AVX-512 and AVX2 + FMA where it has them, and the portable SSE2 one) is held
+// to the twin in every mode; a body the CPU cannot run is skipped, and the skip names it.
+using IsaMode = std::tuple<SkinKernelIsa, SkinningMode>;
+class SkinKernelIsaTest : public ::testing::TestWithParam<IsaMode> {
  protected:
   void SetUp() override {
-    if (GetParam() == SkinKernelIsa::Avx2Fma && !__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 here";
-    force_skin_kernel_isa(GetParam());
+    const SkinKernelIsa isa = std::get<0>(GetParam());
+    if (!skin_kernel_isa_supported(isa))
+      GTEST_SKIP() << "the " << skin_kernel_isa_name(isa) << " body is compiled but this CPU cannot run it";
+    force_skin_kernel_isa(isa);
   }
   void TearDown() override { force_skin_kernel_isa(SkinKernelIsa::Auto); }
 };
 
 TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
-  ASSERT_EQ(skin_kernel_isa(), GetParam());
+  const auto [isa, mode] = GetParam();
+  ASSERT_EQ(skin_kernel_isa(), isa);
   Rig rig = to_rig(load_default_humanoid());
   rig.body = default_bound_body();
   rig.muscles = default_muscle_rig();
@@ -77,9 +85,15 @@ TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
     config.walkers = 3;
     config.motion = MotionSource::Walk;
     spawn_crowd(scene, config);
+    set_skinning_mode(scene, mode);
     set_detail_level(scene, DetailLevel::mesh(level));
     const SkinLayout& layout = current_layout(scene);
     const BodyLevel& body = rig.body->levels[static_cast<std::size_t>(level)];
+    std::vector<glm::vec3> centres;
+    if (mode == SkinningMode::CentresOfRotation) {
+      ASSERT_TRUE(layout.has_cor_centres());
+      centres = body_cor_centres(*rig.body, level)->centres;
+    }
     Profiler profiler(8, false);
     const std::size_t padded = pad_to_lanes(layout.vertex_count);
     std::vector<float> out(6 * padded);
@@ -98,12 +112,12 @@ TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
         ASSERT_TRUE(make_muscle_job(rig.muscles->set, scene.table(initial_slot(scene))).run());
       }
       for (std::size_t w = 0; w < lanes.count; ++w) {
-        ASSERT_TRUE(make_skin_walker_job(layout, scene.table(initial_slot(scene)), w, soa).run());
+        ASSERT_TRUE(make_skin_walker_job(layout, scene.table(initial_slot(scene)), w, soa, mode).run());
         const std::vector<float> force = walker_muscle_forces(lanes, w);
         const MuscleReference muscles{&rig.muscles->set, &rig.muscles->levels[static_cast<std::size_t>(level)],
                                       scene.skin.gains, force};
         const SkinnedVertices ref =
-            skin_reference(body.mesh, body.binding, walker_skinning_matrices(lanes, w), muscles);
+            skin_reference(body.mesh, body.binding, walker_skinning_matrices(lanes, w), mode, centres, muscles);
         const Placement P = placement_of(lanes, w);
         for (std::size_t i = 0; i < layout.vertex_count; ++i) {
           const std::uint32_t v = layout.original[i];
@@ -119,9 +133,71 @@ TEST_P(SkinKernelIsaTest, MatchesTheScalarReferenceOnEveryLevelAndRandomPoses) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(BothBodies, SkinKernelIsaTest,
-                         ::testing::Values(SkinKernelIsa::Avx2Fma, SkinKernelIsa::Portable),
-                         [](const auto& info) { return std::string(info.param == SkinKernelIsa::Avx2Fma ? "Avx2Fma" : "Portable"); });
+INSTANTIATE_TEST_SUITE_P(
+    EveryBodyEveryMode, SkinKernelIsaTest,
+    ::testing::Combine(::testing::Values(SkinKernelIsa::Avx512, SkinKernelIsa::Avx2Fma, SkinKernelIsa::Portable),
+                       ::testing::ValuesIn(kSkinningModes)),
+    [](const auto& info) {
+      const SkinKernelIsa isa = std::get<0>(info.param);
+      const char* name = isa == SkinKernelIsa::Avx512 ? "Avx512" : isa == SkinKernelIsa::Avx2Fma ? "Avx2Fma" : "Portable";
+      return std::string(name) + "_" + skinning_mode_name(std::get<1>(info.param));
+    });
+
+// The non-linear modes at rest are the rest mesh (placed), like linear blending: no drift from the quaternion
+// round trip beyond float noise, and centres of rotation cancel out at rest (R = I, LBS(c) = c).
+TEST(SkinModes, RestPoseIsTheRestMeshInEveryMode) {
+  Rig rig = to_rig(load_default_humanoid());
+  rig.body = default_bound_body();
+  const BodyLevel& body = rig.body->levels[1];
+  std::vector<glm::mat4> identity(rig.skeleton.joint_count(), glm::mat4(1.0f));
+  const std::vector<glm::vec3>& centres = body_cor_centres(*rig.body, 1)->centres;
+  for (const SkinningMode mode : kSkinningModes) {
+    const SkinnedVertices ref = skin_reference(body.mesh, body.binding, identity, mode, centres);
+    float worst = 0.0f;
+    for (std::size_t v = 0; v < body.mesh.vertex_count(); ++v)
+      worst = std::max(worst, glm::length(ref.positions[v] - body.mesh.positions[v]));
+    EXPECT_LT(worst, 1e-6f) << skinning_mode_name(mode);
+  }
+}
+
+// The forearm turned by 180 deg about its own axis at the elbow (the shipped binding blends forearm and upper arm
+// there; the wrist is a hard seam between parts): linear blending pinches the blended vertices towards the axis
+// (the candy wrapper), dual quaternions and centres of rotation keep them at their distance from it.
+TEST(SkinModes, TwistKeepsTheForearmRadiusWithoutLinearBlending) {
+  Rig rig = to_rig(load_default_humanoid());
+  rig.body = default_bound_body();
+  const Skeleton& s = rig.skeleton;
+  const BodyLevel& body = rig.body->levels[1];
+  const int elbow = s.find_joint("l_elbow"), wrist = s.find_joint("l_wrist");
+  ASSERT_GE(elbow, 0);
+  ASSERT_GE(wrist, 0);
+  const glm::vec3 a = s.centers[static_cast<std::size_t>(elbow)], b = s.centers[static_cast<std::size_t>(wrist)];
+  const glm::vec3 axis = glm::normalize(b - a);
+  std::vector<glm::quat> rotations(s.joint_count(), glm::quat(1, 0, 0, 0));
+  rotations[static_cast<std::size_t>(elbow)] = glm::angleAxis(3.14159265f, axis);
+  const ReferencePose pose = fk_reference(s, rotations, glm::vec3(0.0f));
+  const std::vector<glm::vec3>& centres = body_cor_centres(*rig.body, 1)->centres;
+  auto radius = [&](const glm::vec3& p) { return glm::length((p - a) - glm::dot(p - a, axis) * axis); };
+  for (const SkinningMode mode : kSkinningModes) {
+    const SkinnedVertices ref = skin_reference(body.mesh, body.binding, pose.skinning, mode, centres);
+    double kept = 0.0;
+    int blended = 0;
+    for (std::size_t v = 0; v < body.mesh.vertex_count(); ++v) {
+      float we = 0.0f;
+      for (int k = 0; k < kMaxInfluences; ++k)
+        we += body.binding.joints[v][k] == elbow ? body.binding.weights[v][k] : 0.0f;
+      if (we < 0.3f || we > 0.7f) continue;  // only the vertices truly blended between upper arm and forearm
+      kept += radius(ref.positions[v]) / std::max(radius(body.mesh.positions[v]), 1e-6f);
+      ++blended;
+    }
+    ASSERT_GT(blended, 0);
+    kept /= blended;
+    if (mode == SkinningMode::Linear)
+      EXPECT_LT(kept, 0.6) << "linear blending collapses a half-turn twist";
+    else
+      EXPECT_GT(kept, 0.9) << skinning_mode_name(mode);
+  }
+}
 
 TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
   Rig rig = to_rig(load_default_humanoid());

@@ -24,7 +24,9 @@
 #include <tbb/global_control.h>
 
 #include "io/hanim_loader.h"
+#include "reference/skin_reference.h"
 #include "rig/body_rig.h"
+#include "rig/cor_centres.h"
 #include "rig/subdiv_refiner.h"
 #include "rig/subdiv_topology.h"
 #include "systems/animation_sample.h"
@@ -158,6 +160,50 @@ TEST(Subdiv, RestCageMatchesOpenSubdivRefinement) {
       normal_gap = std::max(normal_gap, glm::length(out.normal(0, i) - refined.normals[i]));
     EXPECT_LT(normal_gap, 1e-4f) << "S" << depth;
   }
+}
+
+// S1..S3 in every skinning mode: the refined surface of a walking walker is the stencils applied to the cage as
+// the scalar twin skins it (reference/skin_reference.h, the mode's double-precision definition), placed.
+TEST(Subdiv, EverySkinningModeRefinesTheTwinsCage) {
+  const Rig rig = default_rig();
+  const BodyLevel& cage = *rig.body->cage;
+  for (const SkinningMode mode : kSkinningModes)
+    for (int depth = 1; depth <= kMaxSubdivDepth; ++depth) {
+      Crowd scene(rig);
+      CrowdConfig config;
+      config.motion = MotionSource::Walk;
+      config.walkers = 2;
+      spawn_crowd(scene, config);
+      set_skinning_mode(scene, mode);
+      set_detail_level(scene, DetailLevel::subdiv(depth));
+      Profiler profiler(4, false);
+      for (int f = 0; f < 8; ++f) step(scene, 1.0f / 30.0f, profiler);
+      const SubdivSurface& surface = *scene.skin.subdiv;
+      const SkinnedCrowd& out = current_skinned(scene);
+      const WalkerLanes lanes = scene.lanes();
+      const std::vector<glm::vec3> centres = compute_cor_centres(cage.mesh, cage.binding).centres;
+      float worst = 0.0f;
+      for (std::size_t w = 0; w < lanes.count; ++w) {
+        const SkinnedVertices ref =
+            skin_reference(cage.mesh, cage.binding, walker_skinning_matrices(lanes, w), mode, centres);
+        const Placement P = placement_of(lanes, w);
+        const std::size_t n = surface.cage_layout.vertex_count;
+        std::vector<float> x(n), y(n), z(n);
+        for (std::size_t i = 0; i < n; ++i) {
+          const glm::vec3 p = P.point(ref.positions[surface.cage_layout.original[i]]);
+          x[i] = p.x, y[i] = p.y, z[i] = p.z;
+        }
+        for (const SubdivStencils& st : surface.steps) {
+          std::vector<float> nx(st.rows()), ny(st.rows()), nz(st.rows());
+          apply_subdiv_stencils(st, x.data(), y.data(), z.data(), nx.data(), ny.data(), nz.data());
+          x.swap(nx), y.swap(ny), z.swap(nz);
+        }
+        ASSERT_EQ(x.size(), out.vertex_count);
+        for (std::size_t i = 0; i < out.vertex_count; ++i)
+          worst = std::max(worst, glm::length(out.position(w, i) - glm::vec3(x[i], y[i], z[i])));
+      }
+      EXPECT_LT(worst, 1e-5f) << skinning_mode_name(mode) << " S" << depth;
+    }
 }
 
 TEST(Subdiv, RefinedCageStaysWatertight) {

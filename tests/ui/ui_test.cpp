@@ -155,6 +155,17 @@ TEST_F(UiTest, LevelComboSwitchesTheSceneLevel) {
   EXPECT_EQ(session_->scene().skin.level, DetailLevel::mesh(2));
 }
 
+TEST_F(UiTest, SkinningComboSwitchesTheSceneMode) {
+  frame();
+  frame();
+  ASSERT_EQ(session_->scene().skin.mode, SkinningMode::Linear);
+  click("skinning");  // opens the combo; its items are probed from the next frame
+  frame();
+  ASSERT_TRUE(probe_.rects.count("skinning:dqs")) << "the combo did not list dual quaternions";
+  click("skinning:dqs");
+  EXPECT_EQ(session_->scene().skin.mode, SkinningMode::DualQuaternion);
+}
+
 TEST_F(UiTest, MuscleGainSliderReachesTheScene) {
   ASSERT_TRUE(session_->scene().has_muscles());
   frame();
