@@ -62,7 +62,7 @@ GaitCycleSection gait_cycle_section(const Crowd& scene) {
       nlohmann::json j = gait_cycle_json(c, normative, false);
       out.met = out.met && j["targets_met"].get<bool>();
       classes.push_back(std::move(j));
-      if (height == heights[1] || speed != speeds[1]) out.drawn.push_back(c);
+      if (speed != speeds[1]) out.drawn.push_back(c);  // the extremes; the middle ones lie between
     }
   }
   out.json["gait_cycle_classes"] = classes;

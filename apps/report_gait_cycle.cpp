@@ -70,13 +70,13 @@ std::string gait_cycle_svg(const std::vector<GaitCycle>& cycles, const Normative
   };
   const Panel panels[] = {
       {"Knee flexion (deg)", &GaitCycle::knee_flexion, &normative.knee_flexion, -10.0f, 80.0f},
-      {"Hip flexion (deg)", &GaitCycle::hip_flexion, &normative.hip_flexion, -30.0f, 40.0f},
+      {"Hip flexion (deg)", &GaitCycle::hip_flexion, &normative.hip_flexion, -40.0f, 60.0f},
       {"Ankle dorsiflexion (deg)", &GaitCycle::ankle_dorsiflexion, &normative.ankle_dorsiflexion, -30.0f, 25.0f},
-      {"Shoulder flexion (deg)", &GaitCycle::shoulder_flexion, nullptr, -30.0f, 30.0f},
+      {"Shoulder flexion (deg)", &GaitCycle::shoulder_flexion, nullptr, -40.0f, 40.0f},
       {"Trunk pitch, forward + (deg)", &GaitCycle::trunk_pitch, nullptr, -10.0f, 10.0f},
   };
   const char* colours[] = {"#c0392b", "#2471a3", "#1e8449", "#7d3c98", "#b9770e", "#5d6d7e"};
-  const float width = 640.0f, panel_h = 150.0f, left = 60.0f, right = 20.0f, top = 50.0f, gap = 40.0f;
+  const float width = 640.0f, panel_h = 150.0f, left = 60.0f, right = 20.0f, top = 80.0f, gap = 40.0f;
   const float plot_w = width - left - right;
   const float height = top + 5.0f * (panel_h + gap) + 20.0f;
   std::string svg;
@@ -89,13 +89,12 @@ std::string gait_cycle_svg(const std::vector<GaitCycle>& cycles, const Normative
   std::snprintf(buf, sizeof buf, "<text x=\"%.0f\" y=\"20\" font-size=\"14\">Strata walk (colours) against the "
                 "OpenSim subject (grey, dashed), one cycle from left heel strike</text>\n", left);
   svg += buf;
-  float legend_x = left;
   for (std::size_t k = 0; k < cycles.size(); ++k) {
-    std::snprintf(buf, sizeof buf,
-                  "<text x=\"%.0f\" y=\"38\" fill=\"%s\">%.2f m, %.1f m/s%s</text>\n", legend_x,
+    // Three walkers to a legend row.
+    std::snprintf(buf, sizeof buf, "<text x=\"%.0f\" y=\"%.0f\" fill=\"%s\">%.2f m, %.1f m/s%s</text>\n",
+                  left + 180.0f * static_cast<float>(k % 3), 40.0f + 16.0f * static_cast<float>(k / 3),
                   colours[k % 6], cycles[k].height_m, cycles[k].speed_m_s, k == 0 ? " (bold)" : "");
     svg += buf;
-    legend_x += 130.0f;
   }
   for (int p = 0; p < 5; ++p) {
     const Panel& panel = panels[p];

@@ -69,12 +69,12 @@ struct AnklePose {
 // Stance: flat on the footprint until the heel rises, then rolling about the ball (midtarsal) whose ground
 // contact stays put. tau is the fraction of stance done.
 AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant, float plant_heading, float tau,
-                      float scale, const GaitStyle& style, float* foot_pitch) {
+                      float scale, const GaitStyle& style, float* foot_pitch, float strike_pitch = 0.0f) {
   const glm::quat h = yaw(plant_heading);
   if (tau < style.heel_rocker) {
     // Heel rocker: toes up at heel strike, rolling down about the heel's ground contact to foot flat. The toes
     // follow the foot (no midtarsal bend), so the reported pitch is 0.
-    const float p = -style.heel_strike_pitch * (1.0f - smoothstep01(tau / style.heel_rocker));
+    const float p = -strike_pitch * (1.0f - smoothstep01(tau / style.heel_rocker));
     if (foot_pitch) *foot_pitch = 0.0f;
     const glm::vec3 heel = plant + h * ((rig.heel_rest[leg] - rig.ankle_rest[leg]) * scale);
     const glm::quat q = h * pitch(p);
@@ -290,6 +290,13 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
       begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading, d_to);
     }
   }
+  // The heel-strike pitch follows the step: the shin leans back less over a short step, and a fixed pitch left
+  // the ankle 8.5 deg dorsiflexed at heel strike at 0.8 m/s. Shorter steps than 0.7 m (at rig scale) land with
+  // the pitch scaled by the square of the step; longer ones keep the full pitch (scaling it up too pushed the
+  // ankle to 10 deg at 1.8 m/s). Cadence eases slowly, so the pitch of a rolling heel changes smoothly and its
+  // pivot stays put.
+  const float step_ratio = std::clamp(gp.step_length / (0.7f * scale), 0.5f, 1.0f);
+  const float strike_pitch = style.heel_strike_pitch * step_ratio * step_ratio;
   // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
   // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
   // swinging leg lands on its target. Arcs are built once per frame.
@@ -302,7 +309,7 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
     // The double interpolant: a Cardinal arc through a high early-swing knot (the heel lifted behind: the knee
     // folds) and a raised mid-swing one (ground clearance), walked by an eased distance curve. It lands on the
     // heel-strike pose (toes up), not on the flat footprint.
-    const AnklePose strike = stance_pose(rig, leg, to, to_heading, 0.0f, scale, style, nullptr);
+    const AnklePose strike = stance_pose(rig, leg, to, to_heading, 0.0f, scale, style, nullptr, strike_pitch);
     const glm::vec3 knots[4] = {from, glm::mix(from, strike.position, style.swing_lift_at) + kUp * (style.swing_lift * scale),
                                 glm::mix(from, strike.position, 0.6f) + kUp * (style.swing_clearance * scale),
                                 strike.position};
@@ -342,7 +349,7 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
     const bool in_swing = lp.swinging ? psi < 1.0f : psi >= sf;
     if (!in_swing) {
       const float tau = std::min((lp.swinging ? psi - 1.0f : psi) / sf, 1.0f);
-      return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch);
+      return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch, strike_pitch);
     }
     const float sigma = sf < 1.0f ? std::clamp((psi - sf) / (1.0f - sf), 0.0f, 1.0f) : 1.0f;
     const float e = swing_ease(sigma, style.swing_peak);
