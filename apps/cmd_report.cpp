@@ -122,6 +122,7 @@ int run_gait_report(const GaitReportOptions& o) {
     j["pelvis_bob_cm_mean"] = r.pelvis_bob_cm_mean;
     j["cadence_min"] = r.cadence_min;
     j["cadence_max"] = r.cadence_max;
+    j["swing_clearance_min_mm"] = r.swing_clearance_min_mm;
     j["targets_met"] = slide_ok && ik_ok && limits_ok && nan_ok && stride_ok;
     std::optional<GaitCycleSection> cycle;
     if (o.gait_cycle) {
@@ -146,8 +147,8 @@ int run_gait_report(const GaitReportOptions& o) {
     line("limit_violations", static_cast<double>(r.limit_violations), "0", limits_ok);
     line("nan_count", static_cast<double>(r.nan_count), "0", nan_ok);
     line("stride_length_error_pct", r.stride_length_error_pct, "< 2", stride_ok);
-    std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m\n", r.pelvis_bob_cm_mean,
-                r.stride_length_mean_m);
+    std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m, swing clearance >= %.0f mm\n",
+                r.pelvis_bob_cm_mean, r.stride_length_mean_m, r.swing_clearance_min_mm);
     if (cycle) {
       const nlohmann::json& c = cycle->json["gait_cycle"];
       const nlohmann::json& f = c["features"];

@@ -40,6 +40,7 @@ double distance_mm(const glm::vec3& a, const float ref[3]) {
 GaitMetrics::GaitMetrics(const Skeleton& skeleton, const LocomotionRig& rig, const GaitStyle& style)
     : skeleton_(skeleton), rig_(rig), style_(style) {
   report_.cadence_min = 1e9;
+  report_.swing_clearance_min_mm = 1e9;
   report_.cadence_max = 0;
 }
 
@@ -133,6 +134,16 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
         t.flat = false;
         t.ankle_tracking = false;
       }
+      if (swinging) {
+        // Ground clearance through the middle of the swing (20-80 %; it starts and ends on the ground): the lowest
+        // of the toe tip and the heel above the ground (y = 0 here).
+        const float psi_frac = l.gait[kGaitPhase * s + w] - 0.5f * static_cast<float>(leg);
+        const float psi = psi_frac - std::floor(psi_frac);
+        const float sf = gp.stance_fraction();
+        const float sigma = sf < 1.0f ? (psi - sf) / (1.0f - sf) : 0.0f;
+        if (sigma > 0.2f && sigma < 0.8f)
+          report_.swing_clearance_min_mm = std::min(report_.swing_clearance_min_mm, 1000.0 * std::min(tip.y, heel.y));
+      }
       if (!swinging && !first_) {
         // Each contact point is still while it carries the foot: the heel through the heel rocker (heel strike to
         // foot flat), the ankle while the foot is flat, the ball until the toes bend no further, the toe tip to
@@ -178,6 +189,7 @@ GaitReport GaitMetrics::report() const {
   for (const WalkerTrack& t : walkers_) bob += 100.0 * (t.root_max - t.root_min);
   r.pelvis_bob_cm_mean = walkers_.empty() ? 0.0 : bob / static_cast<double>(walkers_.size());
   if (r.cadence_min > r.cadence_max) r.cadence_min = r.cadence_max = 0;
+  if (r.swing_clearance_min_mm > 1e8) r.swing_clearance_min_mm = 0;
   return r;
 }
 

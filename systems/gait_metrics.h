@@ -33,6 +33,7 @@ struct GaitReport {
   double stride_length_mean_m = 0;
   double pelvis_bob_cm_mean = 0;            // per walker peak-to-peak root height over the run, averaged
   double cadence_min = 0, cadence_max = 0;  // steps/min seen
+  double swing_clearance_min_mm = 0;        // lowest toe tip or heel over the middle of any swing (20-80 %)
 };
 
 class GaitMetrics {
