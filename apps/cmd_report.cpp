@@ -4,14 +4,18 @@
 #include <tbb/global_control.h>
 
 #include <cstdio>
+#include <optional>
 #include <iostream>
 
 #include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
+#include "apps/report_gait_cycle.h"
 #include "apps/scene_options.h"
 #include "render/scene_draw.h"
 #include "systems/gait_metrics.h"
+#include "scene/gait_cycle.h"
+#include "scene/spawn.h"
 #include "scene/step.h"
 
 namespace strata::cli {
@@ -22,10 +26,51 @@ struct GaitReportOptions {
   double seconds = 60.0;
   float fps = 60.0f;
   std::string json;
+  std::string plot;
+  bool gait_cycle = true;
 };
 
+// The gait cycle of the default walker (the crowds' mean stature at the middle of their lane speeds) with its
+// curves, and, per walker class the crowds spawn (slow, middle and fast lane speeds; short and tall walkers), its
+// features: the report checks every class, not only the one it draws.
+struct GaitCycleSection {
+  nlohmann::json json;
+  std::vector<GaitCycle> drawn;
+  bool met = true;
+};
+GaitCycleSection gait_cycle_section(const Crowd& scene) {
+  GaitCycleSection out;
+  const NormativeGait& normative = shipped_normative_gait();
+  const CrowdConfig crowd;
+  GaitCycleOptions base;
+  base.height = crowd.height_mean;
+  base.speed = 0.5f * (crowd.speed_min + crowd.speed_max);
+  const GaitCycle main = measure_gait_cycle(scene.rig(), scene.motion.style, base);
+  out.json["gait_cycle"] = gait_cycle_json(main, normative, true);
+  out.json["gait_cycle"]["walker_class"] = "default";
+  out.met = out.json["gait_cycle"]["targets_met"].get<bool>();
+  out.drawn.push_back(main);
+  nlohmann::json classes = nlohmann::json::array();
+  const float heights[] = {crowd.height_mean - crowd.height_spread, crowd.height_mean + crowd.height_spread};
+  const float speeds[] = {0.8f, 1.3f, 1.8f};  // the range the crowds walk at (lanes plus their speed schedules)
+  for (const float height : heights) {
+    for (const float speed : speeds) {
+      GaitCycleOptions o = base;
+      o.height = height;
+      o.speed = speed;
+      const GaitCycle c = measure_gait_cycle(scene.rig(), scene.motion.style, o);
+      nlohmann::json j = gait_cycle_json(c, normative, false);
+      out.met = out.met && j["targets_met"].get<bool>();
+      classes.push_back(std::move(j));
+      if (speed != speeds[1]) out.drawn.push_back(c);  // the extremes; the middle ones lie between
+    }
+  }
+  out.json["gait_cycle_classes"] = classes;
+  return out;
+}
+
 int run_gait_report(const GaitReportOptions& o) {
-  if (!check_outputs("report gait", {{"--json", o.json}})) return kExitFailure;
+  if (!check_outputs("report gait", {{"--json", o.json}, {"--plot", o.plot}})) return kExitFailure;
   if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
     print_error("report gait", why);
     return kExitFailure;
@@ -62,6 +107,8 @@ int run_gait_report(const GaitReportOptions& o) {
     j["foot_slide_mm_max"] = r.foot_slide_mm_max;
     j["foot_slide_ball_mm_max"] = r.foot_slide_ball_mm_max;
     j["foot_slide_ankle_mm_max"] = r.foot_slide_ankle_mm_max;
+    j["foot_slide_heel_mm_max"] = r.foot_slide_heel_mm_max;
+    j["foot_slide_tip_mm_max"] = r.foot_slide_tip_mm_max;
     j["ik_position_error_max_m"] = r.ik_position_error_max_m;
     j["ik_unreachable_limb_frames"] = r.ik_unreachable;
     j["ik_limits_infeasible_limb_frames"] = r.ik_limits_infeasible;
@@ -75,7 +122,15 @@ int run_gait_report(const GaitReportOptions& o) {
     j["pelvis_bob_cm_mean"] = r.pelvis_bob_cm_mean;
     j["cadence_min"] = r.cadence_min;
     j["cadence_max"] = r.cadence_max;
+    j["swing_clearance_min_mm"] = r.swing_clearance_min_mm;
     j["targets_met"] = slide_ok && ik_ok && limits_ok && nan_ok && stride_ok;
+    std::optional<GaitCycleSection> cycle;
+    if (o.gait_cycle) {
+      cycle = gait_cycle_section(*scene);
+      for (auto& [key, value] : cycle->json.items()) j[key] = value;
+      j["gait_cycle_targets_met"] = cycle->met;
+      if (!o.plot.empty()) write_file_atomically(o.plot, gait_cycle_svg(cycle->drawn, shipped_normative_gait()));
+    }
     nlohmann::json systems = nlohmann::json::array();
     for (const SystemStats& s : profiler.stats())
       systems.push_back({{"name", s.name}, {"mean_ms", s.mean_ms}, {"p95_ms", s.p95_ms}});
@@ -92,8 +147,23 @@ int run_gait_report(const GaitReportOptions& o) {
     line("limit_violations", static_cast<double>(r.limit_violations), "0", limits_ok);
     line("nan_count", static_cast<double>(r.nan_count), "0", nan_ok);
     line("stride_length_error_pct", r.stride_length_error_pct, "< 2", stride_ok);
-    std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m\n", r.pelvis_bob_cm_mean,
-                r.stride_length_mean_m);
+    std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m, swing clearance >= %.0f mm\n",
+                r.pelvis_bob_cm_mean, r.stride_length_mean_m, r.swing_clearance_min_mm);
+    if (cycle) {
+      const nlohmann::json& c = cycle->json["gait_cycle"];
+      const nlohmann::json& f = c["features"];
+      std::printf("gait cycle (%.2f m, %.2f m/s): knee %.1f at heel strike, %.1f loading, %.1f stance min, %.1f swing "
+                  "peak; hip %.1f..%.1f; ankle %.1f..%.1f; trunk %.1f..%.1f; pelvis %.1f cm; rms knee %.1f hip %.1f "
+                  "ankle %.1f deg; all classes %s\n",
+                  c["height_m"].get<double>(), c["speed_m_s"].get<double>(), f["heel_strike_knee_deg"].get<double>(),
+                  f["loading_knee_peak_deg"].get<double>(), f["stance_knee_min_deg"].get<double>(),
+                  f["swing_knee_peak_deg"].get<double>(), f["hip_min_deg"].get<double>(),
+                  f["hip_max_deg"].get<double>(), f["ankle_min_deg"].get<double>(), f["ankle_max_deg"].get<double>(),
+                  f["trunk_min_deg"].get<double>(), f["trunk_max_deg"].get<double>(),
+                  c["pelvis_vertical_excursion_cm"].get<double>(), c["normative_rms_deg"]["knee"].get<double>(),
+                  c["normative_rms_deg"]["hip"].get<double>(), c["normative_rms_deg"]["ankle"].get<double>(),
+                  cycle->met ? "ok" : "MISSED");
+    }
     if (interrupted()) {
       print_error("report gait", "interrupted after " + std::to_string(r.frames) + " of " + std::to_string(frames) +
                                      " frames; the report covers the frames done");
@@ -118,6 +188,9 @@ void add_report_command(CLI::App& app, int& exit_code) {
   gait->add_option("--seconds", o->seconds, "Simulated seconds")->capture_default_str()->check(positive_up_to(86400));
   gait->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(positive_up_to(1000));
   gait->add_option("--json", o->json, "Write the report here");
+  gait->add_option("--plot", o->plot,
+                   "Write the gait cycle's joint-angle curves against the normative subject here (SVG)");
+  gait->add_flag("!--no-gait-cycle", o->gait_cycle, "Skip the gait cycle measurement (joint-angle curves)");
   gait->callback([o, &exit_code] { exit_code = run_gait_report(*o); });
   add_skin_report(*report, exit_code);
   add_muscle_report(*report, exit_code);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <glm/gtc/quaternion.hpp>
 
@@ -18,6 +20,17 @@ glm::vec3 world_joint(const WalkerLanes& l, std::size_t w, std::int32_t joint) {
                                    l.world[(joint * kAffineFloats + 11) * s + w]});
 }
 
+// A point fixed to `joint` (its rest position `rest`) in world space, through the joint's FK frame.
+glm::vec3 world_point(const WalkerLanes& l, std::size_t w, std::int32_t joint, const glm::vec3& rest,
+                      const glm::vec3& rest_center) {
+  const std::size_t s = l.stride;
+  const float* m = l.world + static_cast<std::size_t>(joint) * kAffineFloats * s + w;
+  const glm::vec3 d = rest - rest_center;
+  glm::vec3 p;
+  for (int r = 0; r < 3; ++r) p[r] = m[r * s] * d.x + m[(3 + r) * s] * d.y + m[(6 + r) * s] * d.z + m[(9 + r) * s];
+  return placement_of(l, w).point(p);
+}
+
 double distance_mm(const glm::vec3& a, const float ref[3]) {
   return 1000.0 * glm::length(a - glm::vec3(ref[0], ref[1], ref[2]));
 }
@@ -27,6 +40,7 @@ double distance_mm(const glm::vec3& a, const float ref[3]) {
 GaitMetrics::GaitMetrics(const Skeleton& skeleton, const LocomotionRig& rig, const GaitStyle& style)
     : skeleton_(skeleton), rig_(rig), style_(style) {
   report_.cadence_min = 1e9;
+  report_.swing_clearance_min_mm = 1e9;
   report_.cadence_max = 0;
 }
 
@@ -93,7 +107,10 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
       const std::size_t base = kGaitLegs + static_cast<std::size_t>(leg) * kLegFloats;
       const bool swinging = l.gait[(base + kLegSwinging) * s + w] > 0.5f;
       const glm::vec3 ball = world_joint(l, w, rig_.ball[leg]);
-      const glm::vec3 ankle = world_joint(l, w, rig_.limbs[leg == 0 ? kLeftLeg : kRightLeg].lower);
+      const std::int32_t ankle_joint = rig_.limbs[leg == 0 ? kLeftLeg : kRightLeg].lower;
+      const glm::vec3 ankle = world_joint(l, w, ankle_joint);
+      const glm::vec3 heel = world_point(l, w, ankle_joint, rig_.heel_rest[leg], skeleton_.centers[ankle_joint]);
+      const glm::vec3 tip = world_point(l, w, rig_.ball[leg], rig_.tip_rest[leg], skeleton_.centers[rig_.ball[leg]]);
       t.cadence_sum += cadence;
       ++t.cadence_samples;
       if (!swinging && (t.swinging || first_)) {
@@ -113,21 +130,49 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
         t.plant_distance = l.gait[(base + kLegPlantDistance) * s + w];
         t.cadence_sum = 0;
         t.cadence_samples = 0;
-        for (int k = 0; k < 3; ++k) {
-          t.ball_ref[k] = ball[k];
-          t.ankle_ref[k] = ankle[k];
-        }
-        t.ankle_tracking = true;
+        for (int k = 0; k < 3; ++k) t.heel_ref[k] = heel[k];
+        t.flat = false;
+        t.ankle_tracking = false;
       }
-      if (!swinging && !first_) {
-        report_.foot_slide_ball_mm_max = std::max(report_.foot_slide_ball_mm_max, distance_mm(ball, t.ball_ref));
-        // The ankle is planted until the heel rises.
+      if (swinging) {
+        // Ground clearance through the middle of the swing (20-80 %; it starts and ends on the ground): the lowest
+        // of the toe tip and the heel above the ground (y = 0 here).
         const float psi_frac = l.gait[kGaitPhase * s + w] - 0.5f * static_cast<float>(leg);
         const float psi = psi_frac - std::floor(psi_frac);
-        if (t.ankle_tracking && psi / gp.stance_fraction() < style_.heel_off)
-          report_.foot_slide_ankle_mm_max = std::max(report_.foot_slide_ankle_mm_max, distance_mm(ankle, t.ankle_ref));
-        else
-          t.ankle_tracking = false;
+        const float sf = gp.stance_fraction();
+        const float sigma = sf < 1.0f ? (psi - sf) / (1.0f - sf) : 0.0f;
+        if (sigma > 0.2f && sigma < 0.8f)
+          report_.swing_clearance_min_mm = std::min(report_.swing_clearance_min_mm, 1000.0 * std::min(tip.y, heel.y));
+      }
+      if (!swinging && !first_) {
+        // Each contact point is still while it carries the foot: the heel through the heel rocker (heel strike to
+        // foot flat), the ankle while the foot is flat, the ball until the toes bend no further, the toe tip to
+        // toe-off. References are taken where each phase starts.
+        const float psi_frac = l.gait[kGaitPhase * s + w] - 0.5f * static_cast<float>(leg);
+        const float tau = (psi_frac - std::floor(psi_frac)) / gp.stance_fraction();
+        if (tau < style_.heel_rocker) {
+          report_.foot_slide_heel_mm_max = std::max(report_.foot_slide_heel_mm_max, distance_mm(heel, t.heel_ref));
+        } else {
+          if (!t.flat) {
+            for (int k = 0; k < 3; ++k) {
+              t.ball_ref[k] = ball[k];
+              t.ankle_ref[k] = ankle[k];
+              t.tip_ref[k] = tip[k];
+            }
+            t.flat = true;
+            t.ankle_tracking = true;
+          }
+          const float x = std::clamp((tau - style_.heel_off) / (1.0f - style_.heel_off), 0.0f, 1.0f);
+          const float foot_pitch = style_.toe_off_pitch * x * x * (3.0f - 2.0f * x);
+          if (foot_pitch <= rig_.toe_limit)
+            report_.foot_slide_ball_mm_max = std::max(report_.foot_slide_ball_mm_max, distance_mm(ball, t.ball_ref));
+          report_.foot_slide_tip_mm_max = std::max(report_.foot_slide_tip_mm_max, distance_mm(tip, t.tip_ref));
+          if (t.ankle_tracking && tau < style_.heel_off)
+            report_.foot_slide_ankle_mm_max =
+                std::max(report_.foot_slide_ankle_mm_max, distance_mm(ankle, t.ankle_ref));
+          else
+            t.ankle_tracking = false;
+        }
       }
       t.swinging = swinging;
     }
@@ -137,13 +182,177 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
 
 GaitReport GaitMetrics::report() const {
   GaitReport r = report_;
-  r.foot_slide_mm_max = std::max(r.foot_slide_ball_mm_max, r.foot_slide_ankle_mm_max);
+  r.foot_slide_mm_max = std::max({r.foot_slide_ball_mm_max, r.foot_slide_ankle_mm_max, r.foot_slide_heel_mm_max,
+                                  r.foot_slide_tip_mm_max});
   r.stride_length_mean_m = r.strides ? stride_sum_ / static_cast<double>(r.strides) : 0.0;
   double bob = 0;
   for (const WalkerTrack& t : walkers_) bob += 100.0 * (t.root_max - t.root_min);
   r.pelvis_bob_cm_mean = walkers_.empty() ? 0.0 : bob / static_cast<double>(walkers_.size());
   if (r.cadence_min > r.cadence_max) r.cadence_min = r.cadence_max = 0;
+  if (r.swing_clearance_min_mm > 1e8) r.swing_clearance_min_mm = 0;
   return r;
+}
+
+}  // namespace strata
+
+// ---- GaitCycleRecorder --------------------------------------------------------------------------------------
+
+namespace strata {
+namespace {
+
+// Signed angle (radians) that turns a's projection on the sagittal (YZ) plane into b's, about +X.
+float sagittal_angle(const glm::vec3& a, const glm::vec3& b) {
+  float d = std::atan2(b.z, b.y) - std::atan2(a.z, a.y);
+  d -= 6.28318530718f * std::round(d / 6.28318530718f);
+  return d;
+}
+
+constexpr float kDeg = 57.2957795131f;
+
+}  // namespace
+
+GaitCycleRecorder::GaitCycleRecorder(const Skeleton& skeleton, const LocomotionRig& rig, std::size_t walker,
+                                     std::size_t skip_cycles)
+    : walker_(walker), skip_(skip_cycles) {
+  auto need = [&](const char* name) {
+    const std::int32_t j = skeleton.find_joint(name);
+    if (j < 0) throw std::invalid_argument(std::string("gait cycle: skeleton '") + skeleton.name + "' has no " + name);
+    return j;
+  };
+  const LimbChain& leg = rig.limbs[kLeftLeg];
+  const LimbChain& arm = rig.limbs[kLeftArm];
+  hip_ = leg.upper;
+  knee_ = leg.middle;
+  ankle_ = leg.lower;
+  ball_ = rig.ball[0];
+  shoulder_ = arm.upper;
+  elbow_ = arm.middle;
+  vl5_ = need("vl5");
+  skullbase_ = need("skullbase");
+  const auto& c = skeleton.centers;
+  thigh_ = c[knee_] - c[hip_];
+  shin_ = c[ankle_] - c[knee_];
+  foot_ = c[ball_] - c[ankle_];
+  upper_arm_ = c[elbow_] - c[shoulder_];
+  trunk_ = c[skullbase_] - c[vl5_];
+}
+
+void GaitCycleRecorder::observe(const WalkerLanes& l) {
+  if (walker_ >= l.count) return;
+  const std::size_t s = l.stride, w = walker_;
+  auto rotation = [&](std::int32_t j) {
+    return glm::quat(l.local_rotation[(j * 4 + 3) * s + w], l.local_rotation[(j * 4 + 0) * s + w],
+                     l.local_rotation[(j * 4 + 1) * s + w], l.local_rotation[(j * 4 + 2) * s + w]);
+  };
+  auto position = [&](std::int32_t j) {  // humanoid space: the walker's own frame, facing +Z
+    return glm::vec3(l.world[(j * kAffineFloats + 9) * s + w], l.world[(j * kAffineFloats + 10) * s + w],
+                     l.world[(j * kAffineFloats + 11) * s + w]);
+  };
+  Sample now;
+  now.phase = l.gait[kGaitPhase * s + w];
+  now.value[0] = kDeg * sagittal_angle(shin_, rotation(knee_) * shin_);
+  now.value[1] = -kDeg * sagittal_angle(thigh_, rotation(hip_) * thigh_);
+  now.value[2] = -kDeg * sagittal_angle(foot_, rotation(ankle_) * foot_);
+  now.value[3] = -kDeg * sagittal_angle(upper_arm_, rotation(shoulder_) * upper_arm_);
+  // Forward lean is the trunk's top moving to +Z: a positive turn about +X.
+  now.value[4] = kDeg * sagittal_angle(trunk_, position(skullbase_) - position(vl5_));
+  now.root_y = l.root_translation[1 * s + w] * l.placement[4 * s + w];
+  const float cadence = l.gait[kGaitCadence * s + w];
+  const float height = l.gait[kGaitHeight * s + w];
+
+  const bool wrapped = started_ && now.phase < last_phase_ - 0.5f;
+  if (wrapped && !current_.empty() && skip_ > 0) {
+    --skip_;
+  } else if (wrapped && !current_.empty()) {
+    // A whole cycle from the last left heel strike to this one: the sample before it (phase - 1) and this one
+    // (phase + 1) bracket it, so every one of the 101 points is interpolated, none extrapolated.
+    std::vector<Sample> cycle;
+    cycle.reserve(current_.size() + 2);
+    if (current_.front().phase > 0.0f) {
+      Sample before = last_before_cycle_;
+      before.phase -= 1.0f;
+      cycle.push_back(before);
+    }
+    cycle.insert(cycle.end(), current_.begin(), current_.end());
+    Sample after = now;
+    after.phase += 1.0f;
+    cycle.push_back(after);
+    std::size_t k = 0;
+    for (int i = 0; i < kGaitCycleSamples; ++i) {
+      const float x = static_cast<float>(i) / (kGaitCycleSamples - 1);
+      while (k + 2 < cycle.size() && cycle[k + 1].phase < x) ++k;
+      const Sample& a = cycle[k];
+      const Sample& b = cycle[k + 1];
+      const float u = b.phase > a.phase ? std::clamp((x - a.phase) / (b.phase - a.phase), 0.0f, 1.0f) : 0.0f;
+      for (int c = 0; c < kCurves; ++c) sums_[c][i] += a.value[c] + u * (b.value[c] - a.value[c]);
+    }
+    float lo = 1e9f, hi = -1e9f;
+    for (const Sample& x : current_) {
+      lo = std::min(lo, x.root_y);
+      hi = std::max(hi, x.root_y);
+    }
+    excursion_sum_ += 100.0 * (hi - lo);
+    cadence_sum_ += cycle_cadence_ / std::max<std::size_t>(current_.size(), 1);
+    height_sum_ += height;
+    ++cycles_;
+  }
+  if (wrapped || !started_) {
+    if (wrapped) last_before_cycle_ = last_;
+    current_.clear();
+    cycle_cadence_ = 0;
+    // The first frame seen is mid-cycle; its samples only begin counting at the next heel strike.
+    counting_ = wrapped;
+  }
+  if (counting_) {
+    current_.push_back(now);
+    cycle_cadence_ += cadence;
+  }
+  started_ = true;
+  last_phase_ = now.phase;
+  last_ = now;
+}
+
+GaitCycle GaitCycleRecorder::cycle() const {
+  GaitCycle out;
+  if (cycles_ == 0) return out;
+  GaitCurve* curves[kCurves] = {&out.knee_flexion, &out.hip_flexion, &out.ankle_dorsiflexion, &out.shoulder_flexion,
+                                &out.trunk_pitch};
+  for (int c = 0; c < kCurves; ++c)
+    for (int i = 0; i < kGaitCycleSamples; ++i) (*curves[c])[i] = static_cast<float>(sums_[c][i] / cycles_);
+  out.cycles = cycles_;
+  out.pelvis_vertical_excursion_cm = excursion_sum_ / cycles_;
+  out.cadence_steps_min = cadence_sum_ / cycles_;
+  out.height_m = height_sum_ / cycles_;
+  out.speed_m_s = out.cadence_steps_min * out.cadence_steps_min * out.height_m / 15000.0;  // motion/gait.h
+  return out;
+}
+
+GaitCycleFeatures gait_cycle_features(const GaitCycle& c) {
+  GaitCycleFeatures f;
+  if (c.cycles == 0 || !(c.height_m > 0.0)) return f;
+  const float cadence = std::clamp(static_cast<float>(c.cadence_steps_min), kMinCadence, kMaxCadence);
+  f.stance_fraction = gait_parameters(static_cast<float>(c.height_m), cadence).stance_fraction();
+  const int toe_off = static_cast<int>(std::lround(100.0 * f.stance_fraction));
+  f.heel_strike_knee_deg = c.knee_flexion[0];
+  f.stance_knee_min_deg = 1e9;
+  for (int i = 20; i <= toe_off; ++i) f.stance_knee_min_deg = std::min<double>(f.stance_knee_min_deg, c.knee_flexion[i]);
+  for (int i = 0; i <= 25; ++i) f.loading_knee_peak_deg = std::max<double>(f.loading_knee_peak_deg, c.knee_flexion[i]);
+  for (int i = toe_off; i < kGaitCycleSamples; ++i)
+    f.swing_knee_peak_deg = std::max<double>(f.swing_knee_peak_deg, c.knee_flexion[i]);
+  auto range = [](const GaitCurve& curve, double& lo, double& hi) {
+    lo = *std::min_element(curve.begin(), curve.end());
+    hi = *std::max_element(curve.begin(), curve.end());
+  };
+  range(c.hip_flexion, f.hip_min_deg, f.hip_max_deg);
+  range(c.ankle_dorsiflexion, f.ankle_min_deg, f.ankle_max_deg);
+  range(c.shoulder_flexion, f.shoulder_min_deg, f.shoulder_max_deg);
+  range(c.trunk_pitch, f.trunk_min_deg, f.trunk_max_deg);
+  return f;
+}
+
+NormativeRms normative_rms(const GaitCycle& cycle, const NormativeGait& normative) {
+  return {curve_rms(cycle.knee_flexion, normative.knee_flexion), curve_rms(cycle.hip_flexion, normative.hip_flexion),
+          curve_rms(cycle.ankle_dorsiflexion, normative.ankle_dorsiflexion)};
 }
 
 }  // namespace strata

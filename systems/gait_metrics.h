@@ -7,6 +7,7 @@
 
 #include "components/skeleton.h"
 #include "components/walker.h"
+#include "io/normative_gait.h"
 #include "motion/cardinal_spline.h"
 #include "systems/locomotion.h"
 
@@ -16,9 +17,12 @@ struct GaitReport {
   std::size_t walkers = 0;
   std::size_t frames = 0;
   double seconds = 0;
-  // Foot slide: the ball (midtarsal) over the whole stance and the ankle over its flat part, measured from the
-  // FK output in world space, relative to where each was when its phase began; worst step, millimetres.
+  // Foot slide of each contact point while it carries the foot: the heel from heel strike to foot flat, the
+  // ankle while the foot is flat, the ball (midtarsal) from foot flat until the toes bend no further, the toe tip
+  // from foot flat to toe-off; measured from the FK output in world space, relative to where each was when its
+  // phase began; worst step, millimetres. foot_slide_mm_max is the worst of them.
   double foot_slide_mm_max = 0, foot_slide_ball_mm_max = 0, foot_slide_ankle_mm_max = 0;
+  double foot_slide_heel_mm_max = 0, foot_slide_tip_mm_max = 0;
   double ik_position_error_max_m = 0;       // worst limb goal miss (FK end joint vs goal), world metres
   std::uint64_t ik_unreachable = 0, ik_limits_infeasible = 0, ik_orientation_clamped = 0;  // limb-frames flagged
   std::uint64_t limit_violations = 0;       // joint-frames whose local rotation leaves its limits by > 1e-4 rad
@@ -29,6 +33,7 @@ struct GaitReport {
   double stride_length_mean_m = 0;
   double pelvis_bob_cm_mean = 0;            // per walker peak-to-peak root height over the run, averaged
   double cadence_min = 0, cadence_max = 0;  // steps/min seen
+  double swing_clearance_min_mm = 0;        // lowest toe tip or heel over the middle of any swing (20-80 %)
 };
 
 class GaitMetrics {
@@ -47,6 +52,9 @@ class GaitMetrics {
     std::uint32_t cadence_samples = 0;
     float ball_ref[3] = {0, 0, 0};
     float ankle_ref[3] = {0, 0, 0};
+    float heel_ref[3] = {0, 0, 0};
+    float tip_ref[3] = {0, 0, 0};
+    bool flat = false;  // foot flat reached this stance (the references of ball, ankle and tip taken)
     bool ankle_tracking = false;
   };
   struct WalkerTrack {
@@ -61,5 +69,76 @@ class GaitMetrics {
   double stride_sum_ = 0;
   bool first_ = true;
 };
+
+// One walker's joint-angle curves over a normalised gait cycle (0 = its left heel strike, the walk's phase 0),
+// measured from the local rotations the systems wrote, as a gait lab reads a side view. Left side; degrees:
+//   knee_flexion         shin about the knee's hinge (+X), flexion positive (0 = H-Anim's straight rest leg)
+//   hip_flexion          thigh relative to the pelvis, thigh forward positive
+//   ankle_dorsiflexion   hindfoot-to-midtarsal line relative to the shin, toes up positive
+//   shoulder_flexion     upper arm relative to the shoulder's parent, arm forward positive
+//   trunk_pitch          the vl5 -> skullbase line against its rest direction in the walker's own frame,
+//                        forward lean positive
+// Each is the sagittal (about +X) angle between a segment's rest direction and its rotated one, which is what a
+// side-view goniometer measures; rejected: Euler angles of the joint rotation, whose X component mixes in the
+// pelvic rotation and list at the hip.
+struct GaitCycle {
+  GaitCurve knee_flexion{}, hip_flexion{}, ankle_dorsiflexion{}, shoulder_flexion{}, trunk_pitch{};
+  double pelvis_vertical_excursion_cm = 0;  // root height, peak to peak within a cycle, mean over the cycles
+  double speed_m_s = 0, cadence_steps_min = 0, height_m = 0;
+  int cycles = 0;                           // whole cycles averaged
+};
+
+class GaitCycleRecorder {
+ public:
+  // Throws std::invalid_argument when the skeleton lacks a joint the measures need.
+  // The first `skip_cycles` whole cycles are seen but not counted (a walk settling after its start).
+  GaitCycleRecorder(const Skeleton& skeleton, const LocomotionRig& rig, std::size_t walker = 0,
+                    std::size_t skip_cycles = 0);
+  // Call once per frame after FK. Samples between the walker's first and last observed left heel strikes count.
+  void observe(const WalkerLanes& lanes);
+  int cycles() const { return cycles_; }
+  GaitCycle cycle() const;  // the mean of the whole cycles seen (all zero when none)
+
+ private:
+  static constexpr int kCurves = 5;
+  struct Sample {
+    float phase;
+    float value[kCurves];
+    float root_y;
+  };
+  std::size_t walker_, skip_;
+  std::int32_t hip_, knee_, ankle_, ball_, shoulder_, elbow_, vl5_, skullbase_;
+  glm::vec3 thigh_, shin_, foot_, upper_arm_, trunk_;
+  std::vector<Sample> current_;
+  bool started_ = false;
+  bool counting_ = false;
+  float last_phase_ = 0;
+  Sample last_{}, last_before_cycle_{};
+  double cycle_cadence_ = 0;
+  double sums_[kCurves][kGaitCycleSamples] = {};
+  double excursion_sum_ = 0, cadence_sum_ = 0, height_sum_ = 0;
+  int cycles_ = 0;
+};
+
+// The features a gait lab reads off the curves. Stance is the first stance_fraction of the cycle (motion/gait.h
+// at the measured cadence and stature).
+struct GaitCycleFeatures {
+  double heel_strike_knee_deg = 0;    // knee flexion at 0 %
+  double stance_knee_min_deg = 0;     // least knee flexion from 20 % to toe-off (terminal stance)
+  double loading_knee_peak_deg = 0;   // most knee flexion in the first 25 % (loading response)
+  double swing_knee_peak_deg = 0;     // most knee flexion in swing
+  double hip_min_deg = 0, hip_max_deg = 0;
+  double ankle_min_deg = 0, ankle_max_deg = 0;
+  double shoulder_min_deg = 0, shoulder_max_deg = 0;
+  double trunk_min_deg = 0, trunk_max_deg = 0;
+  double stance_fraction = 0;
+};
+GaitCycleFeatures gait_cycle_features(const GaitCycle& cycle);
+
+// Root mean square difference of a measured cycle and the normative subject (io/normative_gait.h), degrees.
+struct NormativeRms {
+  double knee = 0, hip = 0, ankle = 0;
+};
+NormativeRms normative_rms(const GaitCycle& cycle, const NormativeGait& normative);
 
 }  // namespace strata

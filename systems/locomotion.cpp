@@ -29,9 +29,9 @@ float smoothstep01(float x) {
 }
 
 // The swing's distance curve: a triangular velocity profile (rest, peak at mid-swing, rest), integrated.
-float swing_ease(float sigma) {
+float swing_ease(float sigma, float peak) {
   sigma = std::clamp(sigma, 0.0f, 1.0f);
-  return sigma < 0.5f ? 2.0f * sigma * sigma : 1.0f - 2.0f * (1.0f - sigma) * (1.0f - sigma);
+  return sigma < peak ? sigma * sigma / peak : 1.0f - (1.0f - sigma) * (1.0f - sigma) / (1.0f - peak);
 }
 
 // Polynomial smooth minimum: never above min(a, b), equal to it when |a - b| >= k.
@@ -69,11 +69,28 @@ struct AnklePose {
 // Stance: flat on the footprint until the heel rises, then rolling about the ball (midtarsal) whose ground
 // contact stays put. tau is the fraction of stance done.
 AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant, float plant_heading, float tau,
-                      float scale, const GaitStyle& style, float* foot_pitch) {
+                      float scale, const GaitStyle& style, float* foot_pitch, float strike_pitch = 0.0f) {
+  const glm::quat h = yaw(plant_heading);
+  if (tau < style.heel_rocker) {
+    // Heel rocker: toes up at heel strike, rolling down about the heel's ground contact to foot flat. The toes
+    // follow the foot (no midtarsal bend), so the reported pitch is 0.
+    const float p = -strike_pitch * (1.0f - smoothstep01(tau / style.heel_rocker));
+    if (foot_pitch) *foot_pitch = 0.0f;
+    const glm::vec3 heel = plant + h * ((rig.heel_rest[leg] - rig.ankle_rest[leg]) * scale);
+    const glm::quat q = h * pitch(p);
+    return {heel + q * ((rig.ankle_rest[leg] - rig.heel_rest[leg]) * scale), q};
+  }
   const float p = style.toe_off_pitch * smoothstep01((tau - style.heel_off) / (1.0f - style.heel_off));
   if (foot_pitch) *foot_pitch = p;
-  const glm::quat h = yaw(plant_heading);
-  const glm::vec3 ball = plant + h * ((rig.ball_rest[leg] - rig.ankle_rest[leg]) * scale);
+  glm::vec3 ball = plant + h * ((rig.ball_rest[leg] - rig.ankle_rest[leg]) * scale);
+  const float over = p - rig.toe_limit;
+  if (over > 0.0f) {
+    // The toes bend no further: the forefoot pitches about its tip, which stays put, and lifts the ball. This
+    // second rocker is what lets the trailing leg reach its foot at toe-off with the pelvis only ~3-4 cm below
+    // mid-stance; rolling about the ball alone needed a 7 cm dip (and a crouch) at every double support.
+    const glm::vec3 tip = plant + h * ((rig.tip_rest[leg] - rig.ankle_rest[leg]) * scale);
+    ball = tip + (h * pitch(over)) * ((rig.ball_rest[leg] - rig.tip_rest[leg]) * scale);
+  }
   const glm::quat q = h * pitch(p);
   return {ball + q * ((rig.ankle_rest[leg] - rig.ball_rest[leg]) * scale), q};
 }
@@ -273,6 +290,13 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
       begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading, d_to);
     }
   }
+  // The heel-strike pitch follows the step: the shin leans back less over a short step, and a fixed pitch left
+  // the ankle 8.5 deg dorsiflexed at heel strike at 0.8 m/s. Shorter steps than 0.7 m (at rig scale) land with
+  // the pitch scaled by the square of the step; longer ones keep the full pitch (scaling it up too pushed the
+  // ankle to 10 deg at 1.8 m/s). Cadence eases slowly, so the pitch of a rolling heel changes smoothly and its
+  // pivot stays put.
+  const float step_ratio = std::clamp(gp.step_length / (0.7f * scale), 0.5f, 1.0f);
+  const float strike_pitch = style.heel_strike_pitch * step_ratio * step_ratio;
   // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
   // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
   // swinging leg lands on its target. Arcs are built once per frame.
@@ -280,11 +304,16 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
     SmallCardinalPath arc;
     glm::quat from, to;
   };
-  auto make_swing = [&](const glm::vec3& from, float from_heading, float from_pitch, const glm::vec3& to,
+  auto make_swing = [&](int leg, const glm::vec3& from, float from_heading, float from_pitch, const glm::vec3& to,
                         float to_heading) {
-    // The double interpolant: a Cardinal arc through a raised midpoint, walked by an eased distance curve.
-    const glm::vec3 knots[3] = {from, 0.5f * (from + to) + kUp * (style.swing_clearance * scale), to};
-    return Swing{SmallCardinalPath(knots, 0.0f), yaw(from_heading) * pitch(from_pitch), yaw(to_heading)};
+    // The double interpolant: a Cardinal arc through a high early-swing knot (the heel lifted behind: the knee
+    // folds) and a raised mid-swing one (ground clearance), walked by an eased distance curve. It lands on the
+    // heel-strike pose (toes up), not on the flat footprint.
+    const AnklePose strike = stance_pose(rig, leg, to, to_heading, 0.0f, scale, style, nullptr, strike_pitch);
+    const glm::vec3 knots[4] = {from, glm::mix(from, strike.position, style.swing_lift_at) + kUp * (style.swing_lift * scale),
+                                glm::mix(from, strike.position, 0.6f) + kUp * (style.swing_clearance * scale),
+                                strike.position};
+    return Swing{SmallCardinalPath(knots, 0.0f), yaw(from_heading) * pitch(from_pitch), strike.orientation};
   };
   struct LegPath {
     bool swinging;
@@ -300,7 +329,7 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
     if (lp.swinging) {
       lp.plant = {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)};
       lp.plant_heading = g.leg(leg, kLegToHeading);
-      lp.swing = make_swing({g.leg(leg, kLegFromX), g.leg(leg, kLegFromY), g.leg(leg, kLegFromZ)},
+      lp.swing = make_swing(leg, {g.leg(leg, kLegFromX), g.leg(leg, kLegFromY), g.leg(leg, kLegFromZ)},
                             g.leg(leg, kLegFromHeading), g.leg(leg, kLegFromPitch), lp.plant, lp.plant_heading);
     } else {
       lp.plant = {g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
@@ -309,7 +338,7 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
       const AnklePose from = stance_pose(rig, leg, lp.plant, lp.plant_heading, 1.0f, scale, style, &p);
       const float strike_in = (std::max(sf - lp.psi, 0.0f) + 1.0f - sf) * gp.cycle_time;
       const Pose2 to = footprint(rig, path, landing_distance(g[kGaitDistance], strike_in, gp, style), leg, scale);
-      lp.swing = make_swing(from.position, lp.plant_heading, p, to.position, to.heading);
+      lp.swing = make_swing(leg, from.position, lp.plant_heading, p, to.position, to.heading);
     }
   }
   // `ahead` in seconds, at most ~0.3 cycle so a leg changes mode at most once.
@@ -320,13 +349,13 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
     const bool in_swing = lp.swinging ? psi < 1.0f : psi >= sf;
     if (!in_swing) {
       const float tau = std::min((lp.swinging ? psi - 1.0f : psi) / sf, 1.0f);
-      return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch);
+      return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch, strike_pitch);
     }
     const float sigma = sf < 1.0f ? std::clamp((psi - sf) / (1.0f - sf), 0.0f, 1.0f) : 1.0f;
-    const float e = swing_ease(sigma);
-    // The foot levels out in the first two thirds of the swing so it lands flat.
+    const float e = swing_ease(sigma, style.swing_peak);
+    // The foot turns to its heel-strike pitch in the later part of the swing.
     return {lp.swing->arc.point_at_length(e * lp.swing->arc.length()),
-            glm::slerp(lp.swing->from, lp.swing->to, std::min(1.0f, 1.5f * e))};
+            glm::slerp(lp.swing->from, lp.swing->to, smoothstep01((sigma - style.swing_turn_start) / style.swing_turn_span))};
   };
   for (int leg = 0; leg < 2; ++leg) ankle[leg] = ankle_at(leg, 0.0f, &toe_pitch[leg]);
 
@@ -375,6 +404,17 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
   // plain min leaves a corner (an 8 mm/frame change of vertical speed at 60 fps).
   const float envelope = smooth_min(past, future, 0.025f);
   root_translation.y = std::min(smooth_min(root_translation.y, envelope, 0.03f), now_limit);
+  // Loading response: after each heel strike the pelvis sinks a little further as the stance knee yields
+  // (~15-20 deg at 15 % of the cycle), a smooth bump subtracted after the reach limits, so it only ever shortens
+  // the legs' reach (the guarantee stands). Rejected: a knee-flexion target inside the reach limit, which the
+  // parabolic envelope then smoothed away.
+  for (int leg = 0; leg < 2; ++leg) {
+    const float psi = frac(phase - 0.5f * static_cast<float>(leg));
+    if (psi < style.loading_window) {
+      const float b = std::sin(3.14159265f * psi / style.loading_window);
+      root_translation.y -= style.loading_dip * b * b;
+    }
+  }
   lanes.root_translation.at(0, i) = root_translation.x;
   lanes.root_translation.at(1, i) = root_translation.y;
   lanes.root_translation.at(2, i) = root_translation.z;
@@ -428,6 +468,22 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
     rig.hip_rest[leg] = skeleton.centers[limb.upper];
     rig.ankle_rest[leg] = skeleton.centers[limb.lower];
     rig.ball_rest[leg] = skeleton.centers[rig.ball[leg]];
+    // The heel's ground contact: below the posterior calcaneus site where the skeleton has it, else a fifth of
+    // the ankle-to-ball distance behind the ankle; at the ball's height (the sole's).
+    const std::int32_t heel_site = skeleton.find_site(leg == 0 ? "l_calcaneous_post_pt" : "r_calcaneous_post_pt");
+    glm::vec3 heel = heel_site >= 0 ? skeleton.sites[heel_site].position
+                                    : rig.ankle_rest[leg] - 0.2f * (rig.ball_rest[leg] - rig.ankle_rest[leg]);
+    heel.y = rig.ball_rest[leg].y;
+    rig.heel_rest[leg] = heel;
+    // The toe tip (the last contact before toe-off), on the ground ahead of the ball; without the site, 0.1 m
+    // ahead of it along the foot.
+    const std::int32_t tip_site = skeleton.find_site(leg == 0 ? "l_forefoot_tip" : "r_forefoot_tip");
+    glm::vec3 along = rig.ball_rest[leg] - rig.ankle_rest[leg];
+    along.y = 0.0f;
+    glm::vec3 tip = tip_site >= 0 ? skeleton.sites[tip_site].position
+                                  : rig.ball_rest[leg] + 0.1f * glm::normalize(along + glm::vec3(0, 0, 1e-6f));
+    tip.y = rig.ball_rest[leg].y;
+    rig.tip_rest[leg] = tip;
     // Reach is the farthest the knee's hinge range lets the ankle get, not |thigh| + |shin|: H-Anim's default
     // centres put the ankle 18 deg behind the knee line, and the knee may not hyperextend that far.
     const glm::vec3 thigh = skeleton.centers[limb.middle] - skeleton.centers[limb.upper];
@@ -457,19 +513,26 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
     const glm::vec3 wrist = skeleton.centers[limb.lower];
     rig.wrist_rest[arm] = wrist;
     const float inward = arm == 0 ? -1.0f : 1.0f;  // towards the midline
-    const float reach = glm::length(skeleton.centers[limb.middle] - shoulder) +
-                        glm::length(wrist - skeleton.centers[limb.middle]);
-    // Back, mid, front, mid: raised a little everywhere so the elbow is never locked straight, more in front
-    // where the elbow flexes. Offsets are for a 0.7 m step; the system scales the horizontal part.
-    // A 1 cm raise already bends the elbow ~20 deg (the arm is nearly straight at rest), so raises stay small.
-    std::vector<glm::vec3> knots = {wrist + glm::vec3(0.0f, 0.006f, -0.08f), wrist + glm::vec3(0.0f, 0.008f, 0.0f),
-                                    wrist + glm::vec3(0.02f * inward, 0.03f, 0.11f),
-                                    wrist + glm::vec3(0.004f * inward, 0.009f, 0.004f)};
-    for (glm::vec3& k : knots) {
-      const glm::vec3 d = k - shoulder;
-      const float len = glm::length(d);
-      if (len > 0.97f * reach) k = shoulder + d * (0.97f * reach / len);
-    }
+    // Back, mid, front, mid, placed by the arm's own angles about the hanging pose: the upper arm swings about
+    // the shoulder's transverse axis (flexion forward) and the elbow flexes a little behind the body, more in
+    // front, as in normal walking (shoulder ~+-15-20 deg about hanging). Offsets are for a 0.7 m step; the system
+    // scales their horizontal part. Rejected: fixed wrist offsets from the rest wrist (the old -8 / +11 cm), which
+    // with the elbow bent to reach a raised knot put the upper arm behind the body through the whole cycle
+    // (measured shoulder flexion -17..-1 deg).
+    const glm::vec3 elbow = skeleton.centers[limb.middle];
+    auto wrist_at = [&](float shoulder_flexion_deg, float elbow_flexion_deg, float inward_m) {
+      const float sf = glm::radians(shoulder_flexion_deg), ef = glm::radians(elbow_flexion_deg);
+      // pitch(-a) swings a hanging segment forward by a (H-Anim: +X is the character's left).
+      const glm::quat upper = pitch(-sf);
+      return shoulder + upper * (elbow - shoulder) + (upper * pitch(-ef)) * (wrist - elbow) +
+             glm::vec3(inward_m * inward, 0.0f, 0.0f);
+    };
+    std::vector<glm::vec3> knots = {wrist_at(-16.0f, 10.0f, 0.0f), wrist_at(1.0f, 16.0f, 0.004f),
+                                    wrist_at(17.0f, 26.0f, 0.02f), wrist_at(1.0f, 16.0f, 0.004f)};
+    // The return through the middle passes a little lower and further back than the forward swing, so the loop
+    // does not fold onto itself (a closed Cardinal path through two equal points would have a zero-length
+    // segment).
+    knots[3] = wrist_at(-1.0f, 13.0f, 0.004f);
     rig.wrist_path[arm] = CardinalSpline(knots, 0.0f, true);
   }
   return rig;

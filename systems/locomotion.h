@@ -42,17 +42,45 @@ struct GaitStyle {
   // needs ~30 deg of extension at toe-off; real pelves tilt ~10 deg forward, which is what leaves room for it.
   // Without it the report measured hip extension 0.013 rad past its 0.5 rad limit.
   float pelvis_anterior_tilt = 0.15f;
-  float nominal_drop = 0.02f;        // pelvis below its rest height at mid-stance (a soft knee)
+  // Pelvis below its rest height at mid-stance: 3 mm leaves the stance knee ~5 deg flexed there (0.02 gave 25).
+  float nominal_drop = 0.003f;
+  float loading_dip = 0.012f;        // extra pelvis drop in loading response (the stance knee yields ~15 deg)
+  float loading_window = 0.3f;       // of a cycle after each heel strike, over which that drop rises and ends
   // The pelvis height follows parabolas of this curvature (m/s^2) through the lowest heights the last and the
   // next heel strike allow, so the bob is smooth; hard reach limits alone gave ~1 cm/frame kinks.
-  float bob_curvature = 1.0f;
+  float bob_curvature = 1.8f;  // 1.0 kept the pelvis ~4 cm low through mid-stance (knee 25-30 deg)
   // Footprint placed this many step lengths ahead of the pelvis at heel strike. With the heel rise below it
   // balances the leading leg at heel strike against the trailing one at toe-off: measured pelvis bob peak to
   // peak 2.2 / 5.9 / 10.7 cm at 0.8 / 1.2 / 1.6 m/s (0.5 gave 10 cm and 0.65 gave 7.8 cm at 1.2 m/s).
-  float footprint_lead = 0.6f;
-  float heel_off = 0.35f;            // fraction of stance at which the heel starts to rise
-  float toe_off_pitch = 0.9f;        // foot pitch about its ball at toe-off (~52 deg, as measured in gait labs)
-  float swing_clearance = 0.06f;     // ankle lift above the straight line at mid-swing
+  // Now 0.5 with the heel and toe rockers (issue 21): 0.6 put the foot 0.35 m ahead of the hip at heel strike, a
+  // 7 cm dip and the hip flexed 40 deg.
+  float footprint_lead = 0.5f;
+  float heel_off = 0.55f;            // fraction of stance at which the heel starts to rise (~35 % of the cycle)
+  // Heel strike: the foot lands toes up by heel_strike_pitch and rolls down about its heel until foot flat at
+  // heel_rocker of the stance (~8 % of the cycle), so the ankle is near neutral at heel strike as in a gait lab;
+  // a foot landing flat left the ankle ~15 deg plantarflexed under a shin still leaning back.
+  float heel_strike_pitch = 0.38f;
+  float heel_rocker = 0.13f;
+
+  // Foot pitch at toe-off (~63 deg): about the ball until the toes bend no further (LocomotionRig::toe_limit),
+  // then about the toe tip.
+  float toe_off_pitch = 1.1f;
+  // Ankle lift above the straight line at 60 % of the swing; 0.04 with the early knot below (0.06 with it kept
+  // the thigh lifted, hip flexion 47 deg in late swing). The toes and heel clear the ground by >= 16 mm
+  // (swing_clearance_min_mm in the gait report).
+  float swing_clearance = 0.04f;
+  // Early-swing knot: the ankle lifts this high above the straight line, behind the body, which is what folds
+  // the swing knee (~60 deg); with a single raised mid-swing knot the knee peaked at 51.
+  float swing_lift = 0.18f;
+  float swing_lift_at = 0.12f;       // where along the swing that knot sits (fraction of from -> landing)
+  // The swing ankle's distance curve: a triangular velocity with its peak at this fraction of the swing (the
+  // foot leaves a little quicker than it lands); 0.35 folded the knee sooner but brought the thigh forward too
+  // early (RMS against the subject: hip 14.0 against 12.8 deg).
+  float swing_peak = 0.45f;
+  // The swing foot turns from its toe-off pitch to its heel-strike pitch over [start, start + span] of the swing:
+  // turning from the start (the old 1.5 x distance) pressed the ankle onto its 20 deg dorsiflexion limit while
+  // the shin still pointed back.
+  float swing_turn_start = 0.25f, swing_turn_span = 0.6f;
   float arm_swing = 0.17f;           // wrist travel forward/back at a 0.7 m step, scaled with step length
   float cadence_rate = 25.0f;        // how fast cadence eases to its target, steps/min per second
   float speed_period = 18.0f;        // seconds per cycle of the speed schedule
@@ -65,6 +93,8 @@ struct LocomotionRig {
   std::int32_t ball[2] = {-1, -1};   // l/r_midtarsal: the pivot of the heel rise
   glm::vec3 sacro_center{0.0f};
   glm::vec3 ankle_rest[2], ball_rest[2], hip_rest[2], wrist_rest[2];
+  glm::vec3 heel_rest[2];            // the heel's ground contact (below l/r_calcaneous_post_pt, at the ball's height)
+  glm::vec3 tip_rest[2];             // the toe tip's ground contact (l/r_forefoot_tip at the ball's height)
   float toe_limit = 0.6f;            // how far the midtarsal may dorsiflex to keep the toes down (rad)
   float leg_reach[2] = {0, 0};       // |hip-knee| + |knee-ankle|
   float rig_height = 1.75f;          // stature of the rig (skull_tip, else top joint + 0.13 m)
