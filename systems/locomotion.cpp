@@ -66,8 +66,9 @@ struct AnklePose {
   glm::quat orientation;  // the foot's frame in world axes
 };
 
-// Stance: flat on the footprint until the heel rises, then rolling about the ball (midtarsal) whose ground
-// contact stays put. tau is the fraction of stance done.
+// Stance: toes up at heel strike rolling down about the heel (tau < heel_rocker, pitch strike_pitch at tau 0),
+// flat on the footprint until the heel rises, then rolling about the ball (midtarsal) and, past the toes' limit,
+// about the toe tip; each pivot's ground contact stays put. tau is the fraction of stance done.
 AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant, float plant_heading, float tau,
                       float scale, const GaitStyle& style, float* foot_pitch, float strike_pitch = 0.0f) {
   const glm::quat h = yaw(plant_heading);

@@ -7,10 +7,13 @@
 //
 // Gait determinants modelled: pelvis forward travel along the path; vertical oscillation, two bumps per stride,
 // lowest in double support (the pelvis is as high as both stance legs can reach, capped by a nominal height, so
-// knees flex as much as the step needs and never more); lateral sway towards the stance leg; pelvic rotation
-// about the vertical (+-4 deg) and tilt (list, the swing side drops +-4 deg); stance with a planted flat foot that
-// rolls onto its ball before toe-off (heel rise), whose midtarsal joint keeps the toes on the ground; a swing
-// arc with ground clearance, timed by a distance curve that starts and ends at rest (triangular velocity).
+// knees flex as much as the step needs and never more), plus a small loading-response drop after each heel
+// strike; lateral sway towards the stance leg; pelvic rotation about the vertical (+-4 deg) and tilt (list, the
+// swing side drops +-4 deg); stance with three rockers: heel strike toes up rolling down about the heel, a flat
+// foot, then a heel rise onto the ball (the midtarsal joint keeping the toes on the ground) and, once the toes
+// bend no further, about the toe tip; a swing arc that lifts the heel behind (the knee folds) and clears the
+// ground, timed by a distance curve that starts and ends at rest (triangular velocity); arms swung about the
+// hanging pose. Joint-angle curves against a normative walk: systems/gait_metrics.h GaitCycleRecorder.
 //
 // Cadence may change at any time: phase and distance integrate it, footprints are placed once at toe-off, so a
 // change never moves a planted foot or pops the pelvis.
