@@ -80,6 +80,13 @@ int run_gait_report(const GaitReportOptions& o) {
   try {
     SceneOptions scene_options = o.scene;
     scene_options.motion = "walk";
+    // The report measures every walker's pose, and it has no camera: impostors have no pose, and auto without a
+    // camera would leave a walking crowd as the impostors it is spawned as. Auto is every walker at level 0
+    // here, as it always was without a camera.
+    if (scene_options.level.is_impostor())
+      throw std::invalid_argument("--level impostor: the gait report measures posed walkers, impostors have no pose "
+                                  "(use 0, 1, 2, auto or -1)");
+    if (scene_options.level.is_automatic()) scene_options.level = DetailLevel::mesh(0);
     check_scene_inputs(scene_options);
     std::unique_ptr<Crowd> scene = build_scene(scene_options);
     GaitMetrics metrics(scene->rig().skeleton, *scene->motion.locomotion.get(), scene->motion.style);

@@ -342,6 +342,12 @@ TEST(StrataCrowd, ImpostorsOnlyForTheWalk) {
   EXPECT_EQ(clip.status, 1) << clip.out;
   EXPECT_NE(clip.out.find("--level impostor"), std::string::npos) << clip.out;
   EXPECT_NE(clip.out.find("plays a clip or a capture"), std::string::npos) << clip.out;
+  // The gait report measures posed walkers: impostors are refused, auto measures every walker at level 0.
+  Result gait = run("report gait --walkers 2 --seconds 0.5 --no-gait-cycle --level impostor");
+  EXPECT_EQ(gait.status, 1) << gait.out;
+  EXPECT_NE(gait.out.find("impostors have no pose"), std::string::npos) << gait.out;
+  Result gait_auto = run("report gait --walkers 2 --seconds 0.5 --no-gait-cycle --level auto");
+  EXPECT_EQ(gait_auto.status, 0) << gait_auto.out;
 }
 
 TEST(StrataReport, GaitWritesTheMeasuredTargets) {
