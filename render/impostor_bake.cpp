@@ -15,6 +15,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "components/fnv_hasher.h"
 #include "io/impostor_file.h"
 #include "motion/gait.h"
 #include "motion/track.h"
@@ -34,23 +35,6 @@ namespace {
 // Bumped whenever the bake's output for the same inputs changes (framing, encoding, shaders).
 constexpr std::uint32_t kBakeVersion = 2;
 
-struct Hasher {
-  std::uint64_t h = 1469598103934665603ull;
-  void bytes(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  }
-  template <class T>
-  void value(const T& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    bytes(&v, sizeof v);
-  }
-  template <class T>
-  void vector(const std::vector<T>& v) {
-    value(v.size());
-    if (!v.empty()) bytes(v.data(), v.size() * sizeof(T));
-  }
-};
 
 // A framebuffer with an albedo and a normal-depth colour attachment (and depth), of one atlas layer's size.
 struct BakeTarget {
@@ -91,7 +75,7 @@ void walk_to_phase(Crowd& crowd, float target, Profiler& profiler) {
 }  // namespace
 
 std::uint64_t impostor_atlas_key(const Rig& rig, const GaitStyle& style, const ImpostorBakeOptions& options) {
-  Hasher h;
+  FnvHasher h;
   h.value(kBakeVersion);
   h.vector(rig.skeleton.parents);
   h.vector(rig.skeleton.centers);

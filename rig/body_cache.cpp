@@ -1,5 +1,6 @@
 #include "rig/body_cache.h"
 
+#include "components/fnv_hasher.h"
 #include "io/mesh_check.h"
 #include "io/atomic_file.h"
 
@@ -18,18 +19,6 @@ namespace {
 constexpr char kMagic[8] = {'S', 'T', 'R', 'B', 'O', 'D', 'Y', '1'};
 constexpr std::uint64_t kMaxElements = 1u << 26;  // refuses absurd counts from a corrupt file before allocating
 
-struct Hasher {
-  std::uint64_t h = 1469598103934665603ull;
-  void bytes(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  }
-  template <class T>
-  void value(const T& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    bytes(&v, sizeof v);
-  }
-};
 
 template <class T>
 void write_vector(std::ofstream& out, const std::vector<T>& v) {
@@ -88,7 +77,7 @@ bool read_mesh(std::ifstream& in, Mesh& m) {
 }  // namespace
 
 std::uint64_t body_cache_key(const Skeleton& skeleton, const BodyOptions& options, std::uint32_t version) {
-  Hasher h;
+  FnvHasher h;
   h.value(version);
   h.value(options.grid_cell);
   h.value(options.level_vertices);

@@ -12,6 +12,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "components/fnv_hasher.h"
 #include "io/atomic_file.h"
 #include "rig/body_cache.h"
 
@@ -24,13 +25,6 @@ constexpr std::uint32_t kCorVersion = 1;
 constexpr char kMagic[8] = {'S', 'T', 'R', 'C', 'O', 'R', '0', '1'};
 constexpr std::uint64_t kMaxCentres = 1u << 26;
 
-struct Hasher {
-  std::uint64_t h = 1469598103934665603ull;
-  void bytes(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  }
-};
 
 // A sparse weight vector: joints ascending, weights > 0, summing to 1.
 struct Sparse {
@@ -176,7 +170,7 @@ CorCentres compute_cor_centres(const Mesh& mesh, const SkinBinding& binding, con
 }
 
 std::uint64_t cor_cache_key(const Mesh& mesh, const SkinBinding& binding, const CorOptions& options) {
-  Hasher h;
+  FnvHasher h;
   h.bytes(&kCorVersion, sizeof kCorVersion);
   h.bytes(&options.sigma, sizeof options.sigma);
   const std::uint64_t counts[3] = {mesh.positions.size(), mesh.triangles.size(), binding.vertex_count()};
