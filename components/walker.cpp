@@ -25,6 +25,9 @@ std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t join
   fields[kWalkerGait] = {"gait", ScalarType::F32, kGaitFloats, 0.0f};
   fields[kWalkerPath] = {"path", ScalarType::U32, 1, 0.0f};
   fields[kWalkerFootLock] = {"foot_lock", ScalarType::F32, 2 * kLockFloats, -1.0f};
+  fields[kWalkerAgent] = {"agent", ScalarType::F32, kAgentFloats, 0.0f};
+  fields[kWalkerAgentState] = {"agent_state", ScalarType::U32, kAgentInts, 0.0f};
+  fields[kWalkerAgentCorners] = {"agent_corners", ScalarType::F32, kAgentCorners * 2 + 1, 0.0f};
   fields[kWalkerMusclePoint] = {"muscle_point", ScalarType::F32, p * 3, 0.0f};
   fields[kWalkerMuscleFrame] = {"muscle_frame", ScalarType::F32, p * 6, 0.0f};
   fields[kWalkerMuscleLength] = {"muscle_length", ScalarType::F32, p, 0.0f};

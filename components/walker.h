@@ -42,6 +42,7 @@ enum GaitComponent : std::uint32_t {
   kGaitSpeedPhase,
   kGaitDipHeight,       // pelvis height limit (root translation y, humanoid units) at the last heel strike
   kGaitDipAge,          // seconds since that heel strike
+  kGaitIdle,            // agents only: 0 walking .. 1 standing (feet together, flat, phase held); see locomotion.h
   kGaitLegs             // first per-leg component; leg l's component c is kGaitLegs + l * kLegFloats + c
 };
 enum LegComponent : std::uint32_t {
@@ -64,6 +65,42 @@ enum FootLockComponent : std::uint32_t {
   kLockFloats
 };
 
+// Steering agent of a scenario crowd (systems/navigation.h, systems/avoidance.h, systems/agent_move.h). A walker
+// of a path crowd (the stadium track) leaves these at zero. Ground coordinates: x and z of the world, metres.
+enum AgentComponent : std::uint32_t {
+  kAgentPx, kAgentPz,            // position: the pelvis' point on the ground
+  kAgentVx, kAgentVz,            // velocity it moved with this step (m/s), after turning and acceleration limits
+  kAgentPrefVx, kAgentPrefVz,    // preferred velocity: navigation's output, avoidance's input
+  kAgentOrcaVx, kAgentOrcaVz,    // avoidance's output: the collision-free velocity nearest the preferred one
+  kAgentHeading,                 // facing (rad about +Y, 0 = +Z), turned towards the velocity at a limited rate
+  kAgentRadius,                  // disc radius (m)
+  kAgentPrefSpeed,               // preferred walking speed (m/s)
+  kAgentGoalX, kAgentGoalZ,      // the goal it walks to now
+  kAgentGoalRadius,              // arrived within this distance (m)
+  kAgentTargetX, kAgentTargetZ,  // the corner of its navigation path it steers at
+  kAgentBestDistance,            // nearest it has been to its goal since the goal was set (m, path length)
+  kAgentSinceProgress,           // seconds since it last came 0.25 m nearer (stuck detection)
+  kAgentTravelTime,              // seconds since the goal was set
+  kAgentReplanIn,                // seconds until its path is planned again (staggered over agents)
+  kAgentFloats
+};
+// Integer agent state (U32): group in the scenario, waypoint index, flags, and the corners left of its path.
+enum AgentIntComponent : std::uint32_t {
+  kAgentGroup,     // spawn group (components/scenario.h)
+  kAgentWaypoint,  // index of the goal within its group's waypoints; goals reached so far for random goals
+  kAgentFlags,     // AgentFlag bits
+  kAgentSeed,      // per-agent random state for random goals (xorshift)
+  kAgentInts
+};
+enum AgentFlag : std::uint32_t {
+  kAgentArrived = 1u,   // has reached its (final) goal at least once
+  kAgentNeedsPath = 2u, // plan before steering: new goal or lost corridor
+  kAgentPartialPath = 4u,  // the last plan ended short of the goal (unreachable)
+};
+// Corners of the agent's current path, kAgentCorners of them (x, z), the first not yet reached first; the count is
+// in kWalkerAgentCorners' last component.
+inline constexpr std::uint32_t kAgentCorners = 4;
+
 enum WalkerField : std::uint32_t {
   kWalkerPlacement,        // 5: ground position x, y, z (m), heading about +Y (rad), uniform scale (body height /
                            //    rig height); world = T(position) * Ry(heading) * S(scale) * humanoid space
@@ -80,6 +117,9 @@ enum WalkerField : std::uint32_t {
   kWalkerGait,             // kGaitFloats: locomotion state (GaitComponent, LegComponent)
   kWalkerPath,             // 1, U32: index of the path a walking walker follows (crowd.motion.paths, scene/crowd.h)
   kWalkerFootLock,         // 2*kLockFloats: mocap foot locks (FootLockComponent)
+  kWalkerAgent,            // kAgentFloats: steering agent (AgentComponent)
+  kWalkerAgentState,       // kAgentInts, U32: agent group, waypoint, flags, random state (AgentIntComponent)
+  kWalkerAgentCorners,     // kAgentCorners*2 + 1: path corners (x, z) then their count
   // Muscle layer (systems/muscle.h), per action-line control point p of the rig's muscle set (P points; a rig
   // without muscles keeps one unused column per field, as a table field cannot be empty):
   kWalkerMusclePoint,      // P*3: control point position, humanoid space

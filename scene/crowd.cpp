@@ -1,5 +1,7 @@
 #include "scene/crowd.h"
 
+#include "scene/crowd_agents.h"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -24,6 +26,8 @@ bool slot_is_light(DetailSlot slot, MotionSource source) {
   if (slot == DetailSlot::Impostor) return true;
   return slot == DetailSlot::Culled && source == MotionSource::Walk;
 }
+
+Crowd::~Crowd() = default;
 
 Crowd::Crowd(Rig r) {
   const auto joints = static_cast<std::uint32_t>(r.skeleton.joint_count());

@@ -52,6 +52,7 @@
 namespace strata {
 
 struct SubdivSurface;
+struct CrowdAgents;
 
 // What drives a crowd's walkers, which picks the frame's first systems (scene/step.h).
 enum class MotionSource { Walk, Clip, Mocap };
@@ -130,6 +131,7 @@ struct Crowd {
   // Makes the tables for `rig` and the per-rig resources; throws std::invalid_argument when the rig's muscle
   // layer does not match its body.
   explicit Crowd(Rig rig);
+  ~Crowd();
   Crowd(const Crowd&) = delete;
   Crowd& operator=(const Crowd&) = delete;
 
@@ -145,6 +147,9 @@ struct Crowd {
   // (render/impostor_bake.h ensure_impostor_atlas); dropped when the body or its muscle layer is switched. Baked
   // with the default muscle gains: a gain edit shows on meshes, not on impostors.
   std::shared_ptr<const ImpostorAtlas> impostor_atlas;
+  // A scenario crowd's steered agents (scene/crowd_agents.h): null for the lane walk, clips and capture. When set,
+  // the walk follows each walker's agent instead of a path.
+  std::unique_ptr<CrowdAgents> agents;
 
   const Rig& rig() const { return rigs.get(rig_id); }
   std::uint32_t joint_count() const { return static_cast<std::uint32_t>(rig().skeleton.joint_count()); }

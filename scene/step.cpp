@@ -7,6 +7,7 @@
 
 #include "rig/subdiv_topology.h"
 #include "scene/body_settings.h"
+#include "scene/crowd_agents.h"
 #include "systems/animation_sample.h"
 #include "systems/fk.h"
 #include "systems/ik.h"
@@ -186,7 +187,8 @@ void restart_walks(Crowd& crowd) {
     // identity, as for a new walker.
     if (t.f32(kWalkerLocalRotation, 3)[at.block] == 0.0f)
       for (std::uint32_t j = 0; j < crowd.joint_count(); ++j) t.f32(kWalkerLocalRotation, j * 4 + 3)[at.block] = 1.0f;
-    run_or_throw(make_start_walking_job(*m.locomotion, m.paths, t, at.block, m.style), "start_walking");
+    run_or_throw(make_start_walking_job(*m.locomotion, m.paths, t, at.block, m.style, crowd.agents != nullptr),
+                 "start_walking");
   }
 }
 
@@ -203,6 +205,8 @@ const char* stage_name(Stage stage) {
     case Stage::Lod: return "lod";
     case Stage::Skin: return "skin";
     case Stage::Subdiv: return "subdiv";
+    case Stage::Navigation: return "navigation";
+    case Stage::Avoidance: return "avoidance";
   }
   return "?";
 }
@@ -225,13 +229,22 @@ FrameProfile step(Crowd& crowd, float dt, Profiler& profiler) {
   // 2-3. Motion: what drives the walkers picks the first systems. A walking crowd's light tables only keep their
   // gait clock (simulation level of detail, scene/crowd.h).
   if (m.source == MotionSource::Walk && m.locomotion) {
+    const bool agents = crowd.agents != nullptr;
+    if (agents) {
+      {
+        StageTimer t(profiler, profile, Stage::Navigation);
+        run_navigation_stage(crowd, dt);
+      }
+      StageTimer t(profiler, profile, Stage::Avoidance);
+      run_avoidance_stage(crowd, dt);
+    }
     {
       StageTimer t(profiler, profile, Stage::Locomotion);
       for_each_table(crowd, [&](SoaTable& t) {
         if (is_light_walker_table(t) || &t == &crowd.table(DetailSlot::Culled))
-          run_or_throw(make_gait_advance_job(*m.locomotion, m.paths, t, dt, m.style), "gait_advance");
+          run_or_throw(make_gait_advance_job(*m.locomotion, m.paths, t, dt, m.style, agents), "gait_advance");
         else
-          run_or_throw(make_locomotion_job(*m.locomotion, m.paths, t, dt, m.style), "locomotion");
+          run_or_throw(make_locomotion_job(*m.locomotion, m.paths, t, dt, m.style, agents), "locomotion");
       });
     }
     StageTimer t(profiler, profile, Stage::Ik);

@@ -7,7 +7,11 @@
 //                                        (DetailSlot) each walker is simulated and skinned from, the
 //                                        mesh budget; moves walkers; restarts the walk of walkers
 //                                        leaving a light table (impostors, culled walkers of a walk)
-//   locomotion  systems/locomotion.h     path, cadence, footprints -> placement, pelvis, IK goals     walk
+//   navigation  systems/navigation.h     goals, navigation mesh -> preferred velocities, a few paths   scenario
+//   avoidance   systems/avoidance.h,     every agent's preferred velocity -> collision-free velocity;  scenario
+//               systems/agent_move.h     turned, limited and integrated into agent positions
+//   locomotion  systems/locomotion.h     path (or agent), cadence, footprints -> placement, pelvis,   walk
+//                                        IK goals
 //                                        (light tables: the gait clock and placement only)
 //   animation   systems/animation_sample clock + keyframed clip -> local rotations, root translation  clip
 //   mocap       systems/mocap_drive.h    retargeted capture -> rotations, root motion, foot-lock goals mocap
@@ -31,8 +35,8 @@
 
 namespace strata {
 
-enum class Stage : std::uint8_t { Locomotion, Animation, Mocap, Ik, Fk, Muscle, Lod, Skin, Subdiv };
-inline constexpr std::size_t kStageCount = 9;
+enum class Stage : std::uint8_t { Locomotion, Animation, Mocap, Ik, Fk, Muscle, Lod, Skin, Subdiv, Navigation, Avoidance };
+inline constexpr std::size_t kStageCount = 11;
 // The stage's name in the profiler, the Chrome trace and every JSON that reports per-system times.
 const char* stage_name(Stage stage);
 

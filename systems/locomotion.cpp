@@ -55,9 +55,38 @@ Pose2 path_pose(const CardinalSpline& path, float distance) {
   return {path.point_at_length(distance), heading_of(path.tangent_at_length(distance))};
 }
 
-// The flat footprint of leg `leg` when the pelvis stands at path distance `d`: the rest ankle carried along.
-Pose2 footprint(const LocomotionRig& rig, const CardinalSpline& path, float d, int leg, float scale) {
-  const Pose2 p = path_pose(path, d);
+float wrap_angle(float a) { return a - kTwoPi * std::round(a / kTwoPi); }
+
+// Where the pelvis goes: along a path (the stadium lanes: the walker's own distance along a closed spline), or
+// along a steered agent's trajectory (scenario crowds), predicted from its position, velocity and heading. The
+// walk asks it for the pelvis now, at heel strikes to come (footprints) and at toe-offs past (restarts).
+// Rejected: a per-agent spline through the recent trajectory and a predicted one; rebuilding an arc-length table
+// per walker per frame cost more than the whole walk, and a footprint only needs the pose at one instant.
+struct GroundTrack {
+  const CardinalSpline* path = nullptr;  // path mode when set
+  float distance = 0.0f;                 // path distance (path mode) or odometer (agents), now
+  float speed = 0.0f;                    // m/s: the gait's along a path, the agent's |velocity|
+  glm::vec2 position{0.0f}, velocity{0.0f};  // agents: ground (x, z)
+  float heading = 0.0f, turn_rate = 0.0f;     // agents: facing now, and how fast it turns towards its velocity
+  float speed_ratio = 1.0f;  // agents: |velocity| over the gait's speed at its cadence, in [0, 1]
+
+  // The pelvis `ahead` seconds from now (negative: in the past), `extra` metres further along its way.
+  Pose2 at(float ahead, float extra = 0.0f) const {
+    if (path) return path_pose(*path, distance + speed * ahead + extra);
+    float h = heading;
+    if (speed > 0.05f) {
+      const float turn = wrap_angle(std::atan2(velocity.x, velocity.y) - heading);
+      const float most = turn_rate * std::abs(ahead);
+      h += std::clamp(turn, -most, most);
+    }
+    const glm::vec2 p = position + velocity * ahead + extra * glm::vec2(std::sin(h), std::cos(h));
+    return {{p.x, 0.0f, p.y}, h};
+  }
+  float distance_at(float ahead, float extra = 0.0f) const { return distance + speed * ahead + extra; }
+};
+
+// The flat footprint of leg `leg` under a pelvis at `p`: the rest ankle carried along.
+Pose2 footprint(const LocomotionRig& rig, const Pose2& p, int leg, float scale) {
   return {p.position + yaw(p.heading) * (rig.ankle_rest[leg] * scale), p.heading};
 }
 
@@ -114,10 +143,10 @@ struct GaitRef {
   float& leg(int l, std::uint32_t c) const { return base[(kGaitLegs + l * kLegFloats + c) * stride + i]; }
 };
 
-// Path distance of the footprint a swinging foot lands on: where the pelvis will be at heel strike, `strike_in`
-// seconds from a pelvis at `distance`, plus the footprint lead.
-float landing_distance(float distance, float strike_in, const GaitParameters& gp, const GaitStyle& style) {
-  return distance + gp.speed * strike_in + style.footprint_lead * gp.step_length;
+// How far ahead of the pelvis at heel strike a footprint lands: the lead of a whole step, shortened in proportion
+// when an agent moves slower than its cadence's speed (a stopping walker's last step lands beside the other foot).
+float footprint_lead(const GroundTrack& track, const GaitParameters& gp, const GaitStyle& style) {
+  return style.footprint_lead * gp.step_length * track.speed_ratio;
 }
 
 // A leg's planted footprint and the swing it starts at toe-off, written where walk_one and start_walking need them.
@@ -177,13 +206,15 @@ struct PelvisMotion {
   float yaw;
 };
 
-PelvisMotion pelvis_motion(const GaitStyle& style, float phase) {
+// `walking` scales the walk's rotation and sway (0 for a standing agent) and `extra_sway` adds the stance's slow
+// weight shift.
+PelvisMotion pelvis_motion(const GaitStyle& style, float phase, float walking = 1.0f, float extra_sway = 0.0f) {
   const float angle = kTwoPi * phase;
   PelvisMotion m;
-  m.yaw = -style.pelvis_yaw * std::cos(angle);             // left hip forward at left heel strike
-  const float tilt = style.pelvis_tilt * std::sin(angle);  // right side drops in left stance
+  m.yaw = -walking * style.pelvis_yaw * std::cos(angle);             // left hip forward at left heel strike
+  const float tilt = walking * style.pelvis_tilt * std::sin(angle);  // right side drops in left stance
   m.sacro = yaw(m.yaw) * glm::angleAxis(tilt, glm::vec3(0.0f, 0.0f, 1.0f)) * pitch(style.pelvis_anterior_tilt);
-  m.sway = style.lateral_sway * std::sin(angle);
+  m.sway = walking * style.lateral_sway * std::sin(angle) + extra_sway;
   return m;
 }
 
@@ -226,12 +257,61 @@ void schedule_cadence(const GaitRef& g, float time, const GaitStyle& style) {
 // place and phase whichever job moved it.
 struct GaitClock {
   GaitParameters gp;
+  GroundTrack track;
   Pose2 pelvis;
   float scale;
 };
-GaitClock advance_gait_clock(const LocomotionRig& rig, const CardinalSpline& path, const GaitRef& g, float& time,
+
+// An index past the scene's paths follows the last one (a caller that shrank the path list keeps walking).
+const CardinalSpline& path_of(std::span<const CardinalSpline> paths, std::uint32_t index) {
+  return paths[std::min<std::size_t>(index, paths.size() - 1)];
+}
+
+// Where the walker's pelvis goes: its path, or (agent views set) its agent's trajectory.
+struct TrackSource {
+  std::span<const CardinalSpline> paths;
+  ColumnView<const std::uint32_t> path;
+  ColumnView<const float> agent;  // empty: path mode
+  bool agents() const { return agent.components > 0; }
+};
+
+// Agents: the walk's cadence for an agent moving at `speed`. The gait formula's, but never below a stepping pace:
+// a walker turning on the spot or easing to a stop steps at a natural rate with short steps, where the formula's
+// cadence at a crawl (40 steps/min) looked like slow motion.
+float agent_cadence(float speed, float height, const GaitStyle& style) {
+  return std::clamp(std::max(cadence_for_speed(speed, height), style.agent_min_cadence), kMinCadence, kMaxCadence);
+}
+
+GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source, const GaitRef& g, float& time,
                              ColumnView<float> placement, std::size_t i, float dt, const GaitStyle& style) {
   time += dt;
+  const float scale = g[kGaitHeight] / rig.rig_height;
+  GroundTrack track;
+  if (source.agents()) {
+    // The agent moved the body (systems/agent_move.h); the gait keeps time with it. Its velocity is already
+    // limited in acceleration and turning, so the cadence follows it directly rather than easing; a walker
+    // standing (kGaitIdle > 0) holds its phase.
+    const ColumnView<const float>& a = source.agent;
+    track.position = {a.at(kAgentPx, i), a.at(kAgentPz, i)};
+    track.velocity = {a.at(kAgentVx, i), a.at(kAgentVz, i)};
+    track.heading = a.at(kAgentHeading, i);
+    track.turn_rate = style.turn_rate;
+    track.speed = glm::length(track.velocity);
+    g[kGaitCadenceTarget] = g[kGaitCadence] = agent_cadence(track.speed, g[kGaitHeight], style);
+    const GaitParameters gp = current_gait(g);
+    if (g[kGaitIdle] <= 0.0f) g[kGaitPhase] = frac(g[kGaitPhase] + dt / gp.cycle_time);
+    g[kGaitDistance] += track.speed * dt;
+    track.distance = g[kGaitDistance];
+    track.speed_ratio = std::clamp(track.speed / gp.speed, 0.0f, 1.0f);
+    const Pose2 pelvis = track.at(0.0f);
+    placement.at(0, i) = pelvis.position.x;
+    placement.at(1, i) = 0.0f;
+    placement.at(2, i) = pelvis.position.z;
+    placement.at(3, i) = pelvis.heading;
+    placement.at(4, i) = scale;
+    return {gp, track, pelvis, scale};
+  }
+  const CardinalSpline& path = path_of(source.paths, source.path.at(0, i));
   // Speed schedule -> cadence target -> eased cadence. Phase and distance integrate it: no pop on change.
   schedule_cadence(g, time, style);
   const float max_step = style.cadence_rate * dt;
@@ -244,31 +324,36 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const CardinalSpline& pat
     // the path length.
     g[kGaitDistance] -= path.length();
   }
-  const float scale = g[kGaitHeight] / rig.rig_height;
-  const Pose2 pelvis = path_pose(path, g[kGaitDistance]);
+  track.path = &path;
+  track.distance = g[kGaitDistance];
+  track.speed = gp.speed;
+  const Pose2 pelvis = track.at(0.0f);
   placement.at(0, i) = pelvis.position.x;
   placement.at(1, i) = 0.0f;
   placement.at(2, i) = pelvis.position.z;
   placement.at(3, i) = pelvis.heading;
   placement.at(4, i) = scale;
-  return {gp, pelvis, scale};
+  return {gp, track, pelvis, scale};
 }
 
-// An index past the scene's paths follows the last one (a caller that shrank the path list keeps walking).
-const CardinalSpline& path_of(std::span<const CardinalSpline> paths, std::uint32_t index) {
-  return paths[std::min<std::size_t>(index, paths.size() - 1)];
+// Agents: whether the walker wants to stand, from its velocity and the velocity it would like.
+bool agent_wants_to_stand(const ColumnView<const float>& agent, std::size_t i, const GaitStyle& style) {
+  const float v = std::hypot(agent.at(kAgentVx, i), agent.at(kAgentVz, i));
+  const float pref = std::hypot(agent.at(kAgentPrefVx, i), agent.at(kAgentPrefVz, i));
+  return v < style.stand_speed && pref < style.stand_speed;
 }
 
-void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, const LocomotionColumns& lanes,
-              std::size_t i, float dt, const GaitStyle& style) {
+void walk_one(const LocomotionRig& rig, const TrackSource& source, const LocomotionColumns& lanes, std::size_t i,
+              float dt, const GaitStyle& style) {
   GaitRef g{lanes.gait.base, lanes.gait.stride, i};
-  const CardinalSpline& path = path_of(paths, lanes.path.at(0, i));
-  const GaitClock clock = advance_gait_clock(rig, path, g, lanes.time.at(0, i), lanes.placement, i, dt, style);
+  const GaitClock clock = advance_gait_clock(rig, source, g, lanes.time.at(0, i), lanes.placement, i, dt, style);
   const GaitParameters& gp = clock.gp;
+  const GroundTrack& track = clock.track;
   const float phase = g[kGaitPhase];
   const float scale = clock.scale;
   const Pose2 pelvis = clock.pelvis;
   const WalkerFrame frame{pelvis.position, pelvis.heading, scale};
+  const float lead = footprint_lead(track, gp, style);
 
   // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
   const float sf = gp.stance_fraction();
@@ -286,17 +371,38 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
       const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), 1.0f, scale, style, &p);
-      const float d_to = landing_distance(g[kGaitDistance], (1.0f - psi) * gp.cycle_time, gp, style);
-      const Pose2 to = footprint(rig, path, d_to, leg, scale);
-      begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading, d_to);
+      const float strike_in = (1.0f - psi) * gp.cycle_time;
+      const Pose2 to = footprint(rig, track.at(strike_in, lead), leg, scale);
+      begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
+                  track.distance_at(strike_in, lead));
     }
   }
+  // Agents: standing. A walker that wants to stand goes on stepping (its last steps land beside the other foot,
+  // the lead shrinking with its speed) until both feet are down side by side; then it holds its phase and
+  // settles, both feet flat, into an idle stance over idle_settle seconds. It leaves the stance as quickly when
+  // it wants to move, and agent_move holds the body still until it has.
+  float idle = 0.0f;
+  if (source.agents()) {
+    idle = g[kGaitIdle];
+    if (agent_wants_to_stand(source.agent, i, style)) {
+      const bool both_down = g.leg(0, kLegSwinging) < 0.5f && g.leg(1, kLegSwinging) < 0.5f;
+      const glm::vec3 apart = glm::vec3(g.leg(0, kLegPlantX), 0.0f, g.leg(0, kLegPlantZ)) -
+                              glm::vec3(g.leg(1, kLegPlantX), 0.0f, g.leg(1, kLegPlantZ));
+      const float along = std::abs(glm::dot(apart, glm::vec3(std::sin(pelvis.heading), 0.0f, std::cos(pelvis.heading))));
+      if (idle > 0.0f || (both_down && along < style.stand_feet_apart * scale))
+        idle = std::min(1.0f, idle + dt / style.idle_settle);
+    } else {
+      idle = std::max(0.0f, idle - dt / style.idle_release);
+    }
+    g[kGaitIdle] = idle;
+  }
+  const float settle = smoothstep01(idle);  // 0 walking, 1 standing
   // The heel-strike pitch follows the step: the shin leans back less over a short step, and a fixed pitch left
   // the ankle 8.5 deg dorsiflexed at heel strike at 0.8 m/s. Shorter steps than 0.7 m (at rig scale) land with
   // the pitch scaled by the square of the step; longer ones keep the full pitch (scaling it up too pushed the
   // ankle to 10 deg at 1.8 m/s). Cadence eases slowly, so the pitch of a rolling heel changes smoothly and its
   // pivot stays put.
-  const float step_ratio = std::clamp(gp.step_length / (0.7f * scale), 0.5f, 1.0f);
+  const float step_ratio = std::clamp(gp.step_length * track.speed_ratio / (0.7f * scale), 0.5f, 1.0f);
   const float strike_pitch = style.heel_strike_pitch * step_ratio * step_ratio;
   // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
   // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
@@ -338,7 +444,7 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, lp.plant, lp.plant_heading, 1.0f, scale, style, &p);
       const float strike_in = (std::max(sf - lp.psi, 0.0f) + 1.0f - sf) * gp.cycle_time;
-      const Pose2 to = footprint(rig, path, landing_distance(g[kGaitDistance], strike_in, gp, style), leg, scale);
+      const Pose2 to = footprint(rig, track.at(strike_in, lead), leg, scale);
       lp.swing = make_swing(leg, from.position, lp.plant_heading, p, to.position, to.heading);
     }
   }
@@ -359,6 +465,18 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
             glm::slerp(lp.swing->from, lp.swing->to, smoothstep01((sigma - style.swing_turn_start) / style.swing_turn_span))};
   };
   for (int leg = 0; leg < 2; ++leg) ankle[leg] = ankle_at(leg, 0.0f, &toe_pitch[leg]);
+  if (settle > 0.0f) {
+    // Standing: each foot eases from its pose at the held phase to flat on its footprint (a trailing heel comes
+    // down, a landing forefoot rolls down), so the stance has both soles on the ground.
+    const float flat_tau = 0.5f * (style.heel_rocker + style.heel_off);
+    for (int leg = 0; leg < 2; ++leg) {
+      const AnklePose flat = stance_pose(rig, leg, legs[leg].plant, legs[leg].plant_heading, flat_tau, scale, style,
+                                         nullptr, strike_pitch);
+      ankle[leg].position = glm::mix(ankle[leg].position, flat.position, settle);
+      ankle[leg].orientation = glm::slerp(ankle[leg].orientation, flat.orientation, settle);
+      toe_pitch[leg] *= 1.0f - settle;
+    }
+  }
 
   // ---- Pelvis: sway, rotation and tilt, and the height both legs can reach -------------------------------
   // The pelvis goes as high as the nominal height allows, never higher than both legs reach, and smoothly: the
@@ -366,7 +484,9 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
   // (the most binding one is kept with its age) and sampled ahead until the next foot event, whose poses are
   // already known. Taking the reach limit alone gave ~1 cm/frame kinks where a constraint started or stopped
   // binding; the parabolas turn those into smooth dips, lowest in double support as in a real gait.
-  const PelvisMotion motion = pelvis_motion(style, phase);
+  const PelvisMotion motion = pelvis_motion(style, phase, 1.0f - settle,
+                                            settle * style.idle_sway * std::sin(kTwoPi * lanes.time.at(0, i) /
+                                                                                style.idle_sway_period));
   glm::vec3 root_translation{motion.sway, -style.nominal_drop, 0.0f};
   const glm::vec3 ankle_world[2] = {ankle[0].position, ankle[1].position};
   const float now_limit = reach_limit(rig, frame, motion, ankle_world, 1e9f, 0.0f);
@@ -385,10 +505,12 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
   // a lane's curvature moves it by under a millimetre, and one path evaluation instead of one per sample cut
   // the system from 7 to ~4 us per walker. The final min with the exact current limit keeps reach guaranteed.
   const float window_time = window * gp.cycle_time;
-  const Pose2 window_end = path_pose(path, g[kGaitDistance] + gp.speed * window_time);
+  const Pose2 window_end = track.at(window_time);
   float heading_change = window_end.heading - pelvis.heading;
   heading_change -= kTwoPi * std::round(heading_change / kTwoPi);
-  for (float grid = std::floor(phase * kSamplesPerCycle) + 1.0f;; grid += 1.0f) {
+  // A standing walker's feet do not move: the reach now binds, nothing ahead (the walk's poses ahead would be
+  // those of a held phase).
+  for (float grid = std::floor(phase * kSamplesPerCycle) + 1.0f; settle <= 0.0f; grid += 1.0f) {
     const float ahead_cycles = grid / kSamplesPerCycle - phase;
     if (ahead_cycles > window) break;
     const float ahead = ahead_cycles * gp.cycle_time;
@@ -413,7 +535,7 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
     const float psi = frac(phase - 0.5f * static_cast<float>(leg));
     if (psi < style.loading_window) {
       const float b = std::sin(3.14159265f * psi / style.loading_window);
-      root_translation.y -= style.loading_dip * b * b;
+      root_translation.y -= (1.0f - settle) * style.loading_dip * b * b;
     }
   }
   lanes.root_translation.at(0, i) = root_translation.x;
@@ -432,15 +554,16 @@ void walk_one(const LocomotionRig& rig, std::span<const CardinalSpline> paths, c
     write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, frame.to_humanoid(ankle[leg].position),
                frame.to_humanoid(ankle[leg].orientation),
                IkMode::PositionOrientation);
-  const float swing_scale = std::clamp(gp.step_length / (0.7f * scale), 0.3f, 1.6f);
+  const float swing_scale = std::clamp(gp.step_length * track.speed_ratio / (0.7f * scale), 0.3f, 1.6f);
   for (int arm = 0; arm < 2; ++arm) {
     // Left arm back at left heel strike (phase 0), forward half a cycle later; the right arm the opposite.
     const float u = 4.0f * frac(phase + 0.5f * static_cast<float>(arm));
     const glm::vec3 p = rig.wrist_path[arm].point(u);
     const glm::vec3 rest = rig.wrist_rest[arm];
     // The upper body rides on the root translation (the pelvis bob and sway), so the wrist path does too.
-    const glm::vec3 goal = root_translation + glm::vec3(rest.x + swing_scale * (p.x - rest.x), p.y,
-                                                        rest.z + swing_scale * (p.z - rest.z));
+    // A standing walker's arms ease back to hanging.
+    const glm::vec3 swung(rest.x + swing_scale * (p.x - rest.x), p.y, rest.z + swing_scale * (p.z - rest.z));
+    const glm::vec3 goal = root_translation + glm::mix(swung, rest, settle);
     write_goal(lanes, arm == 0 ? kLeftArm : kRightArm, i, goal, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), IkMode::Position);
   }
 }
@@ -576,11 +699,22 @@ bool gait_state_valid(const ColumnView<float>& gait, std::size_t i) {
          std::isfinite(gait.at(kGaitCadenceTarget, i));
 }
 
+
+// Path mode needs a path; agent mode (agent view set) needs the agent view's width and rows.
+bool track_source_fits(const LocomotionColumns& c, std::span<const CardinalSpline> paths, std::size_t count) {
+  if (c.agent.components == 0) return !paths.empty();
+  return c.agent.fits(count, kAgentFloats);
+}
+
+TrackSource track_source(const LocomotionColumns& c, std::span<const CardinalSpline> paths) {
+  return {paths, c.path, c.agent};
+}
+
 }  // namespace
 
 bool StartWalkingJob::validate() const {
-  return rig && style && !paths.empty() && walker < path.count && columns_fit(*this, *rig, path.count) &&
-         gait_state_valid(gait, walker);
+  return rig && style && walker < path.count && columns_fit(*this, *rig, path.count) &&
+         track_source_fits(*this, paths, path.count) && gait_state_valid(gait, walker);
 }
 
 bool StartWalkingJob::run() const {
@@ -590,39 +724,45 @@ bool StartWalkingJob::run() const {
   const LocomotionColumns& lanes = *this;
   const std::size_t i = walker;
   GaitRef g{lanes.gait.base, lanes.gait.stride, i};
-  const CardinalSpline& path = path_of(paths, lanes.path.at(0, i));
+  const TrackSource source = track_source(lanes, paths);
   // The schedule at the walker's clock: 0 for a new walker, later for one restarting after it was an impostor.
   schedule_cadence(g, lanes.time.at(0, i), style);
   g[kGaitCadence] = std::clamp(g[kGaitCadenceTarget], kMinCadence, kMaxCadence);
-  const GaitParameters gp = current_gait(g);
-  const float scale = g[kGaitHeight] / rig.rig_height;
-  const float s = g[kGaitDistance];
+  // The clock at dt = 0 gives the track and gait now without moving anything.
+  const GaitClock clock = advance_gait_clock(rig, source, g, lanes.time.at(0, i), lanes.placement, i, 0.0f, style);
+  const GaitParameters& gp = clock.gp;
+  const GroundTrack& track = clock.track;
+  const float scale = clock.scale;
   const float sf = gp.stance_fraction();
-  const float lead = style.footprint_lead * gp.step_length;
+  const float lead = footprint_lead(track, gp, style);
+  // A standing agent has both feet down on their footprints, whatever its held phase.
+  const bool standing = source.agents() && g[kGaitIdle] > 0.0f;
   for (int leg = 0; leg < 2; ++leg) {
     const float psi = frac(g[kGaitPhase] - 0.5f * static_cast<float>(leg));
     // The footprint of the last heel strike, psi cycles ago.
-    const float d_plant = s - gp.speed * psi * gp.cycle_time + lead;
-    const Pose2 plant = footprint(rig, path, d_plant, leg, scale);
-    plant_foot(g, leg, plant.position, plant.heading, d_plant);
-    if (psi >= sf) {
+    const float ago = -psi * gp.cycle_time;
+    const Pose2 plant = footprint(rig, track.at(ago, lead), leg, scale);
+    plant_foot(g, leg, plant.position, plant.heading, track.distance_at(ago, lead));
+    if (psi >= sf && !standing) {
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, plant.position, plant.heading, 1.0f, scale, style, &p);
-      const float d_to = landing_distance(s, (1.0f - psi) * gp.cycle_time, gp, style);
-      const Pose2 to = footprint(rig, path, d_to, leg, scale);
-      begin_swing(g, leg, from.position, plant.heading, p, to.position, to.heading, d_to);
+      const float strike_in = (1.0f - psi) * gp.cycle_time;
+      const Pose2 to = footprint(rig, track.at(strike_in, lead), leg, scale);
+      begin_swing(g, leg, from.position, plant.heading, p, to.position, to.heading, track.distance_at(strike_in, lead));
     }
   }
   // No strike seen yet: a limit far in the past never binds; the prediction of the next strike does.
   g[kGaitDipHeight] = 0.0f;
   g[kGaitDipAge] = 10.0f;
   // Settle placement and goals for time "now" without advancing it.
-  walk_one(rig, paths, lanes, i, 0.0f, style);
+  walk_one(rig, source, lanes, i, 0.0f, style);
   return true;
 }
 
 bool LocomotionJob::validate() const {
-  if (!rig || !style || paths.empty() || !std::isfinite(dt) || !columns_fit(*this, *rig, path.count)) return false;
+  if (!rig || !style || !std::isfinite(dt) || !columns_fit(*this, *rig, path.count) ||
+      !track_source_fits(*this, paths, path.count))
+    return false;
   for (std::size_t i = 0; i < path.count; ++i)
     if (!gait_state_valid(gait, i)) return false;
   return true;
@@ -633,15 +773,17 @@ bool LocomotionJob::run() const {
   constexpr std::size_t kChunk = 64;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, path.count, kChunk),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i < r.end(); ++i) walk_one(*rig, paths, *this, i, dt, *style);
+                      const TrackSource source = track_source(*this, paths);
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) walk_one(*rig, source, *this, i, dt, *style);
                     },
                     tbb::simple_partitioner());
   return true;
 }
 
 bool GaitAdvanceJob::validate() const {
-  if (!rig || !style || paths.empty() || !std::isfinite(dt) || !(rig->rig_height > 0.0f)) return false;
+  if (!rig || !style || !std::isfinite(dt) || !(rig->rig_height > 0.0f)) return false;
   const std::size_t count = path.count;
+  if (agent.components == 0 ? paths.empty() : !agent.fits(count, kAgentFloats)) return false;
   if (!gait.fits(count, kGaitFloats) || !time.fits(count, 1) || !placement.fits(count, 5)) return false;
   if (gait.overlaps(time) || gait.overlaps(placement) || time.overlaps(placement) || gait.overlaps(path) ||
       time.overlaps(path) || placement.overlaps(path))
@@ -657,10 +799,16 @@ bool GaitAdvanceJob::run() const {
   constexpr std::size_t kChunk = 256;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, path.count, kChunk),
                     [&](const tbb::blocked_range<std::size_t>& r) {
+                      const TrackSource source{paths, path, agent};
                       for (std::size_t i = r.begin(); i < r.end(); ++i) {
                         const GaitRef g{gait.base, gait.stride, i};
-                        advance_gait_clock(*rig, path_of(paths, path.at(0, i)), g, time.at(0, i), placement, i, dt,
-                                           *style);
+                        advance_gait_clock(*rig, source, g, time.at(0, i), placement, i, dt, *style);
+                        if (source.agents()) {
+                          // No feet to wait for: a far agent stands or walks as soon as it wants to.
+                          g[kGaitIdle] = agent_wants_to_stand(agent, i, *style)
+                                             ? std::min(1.0f, g[kGaitIdle] + dt / style->idle_settle)
+                                             : std::max(0.0f, g[kGaitIdle] - dt / style->idle_release);
+                        }
                       }
                     },
                     tbb::simple_partitioner());
@@ -668,9 +816,10 @@ bool GaitAdvanceJob::run() const {
 }
 
 GaitAdvanceJob make_gait_advance_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths,
-                                     SoaTable& walkers, float dt, const GaitStyle& style) {
+                                     SoaTable& walkers, float dt, const GaitStyle& style, bool follow_agents) {
   GaitAdvanceJob job;
   job.path = u32_view(std::as_const(walkers), kWalkerPath);
+  if (follow_agents) job.agent = f32_view(std::as_const(walkers), kWalkerAgent);
   job.gait = f32_view(walkers, kWalkerGait);
   job.time = f32_view(walkers, kWalkerClock).columns(0, 1);
   job.placement = f32_view(walkers, kWalkerPlacement);
@@ -681,25 +830,29 @@ GaitAdvanceJob make_gait_advance_job(const LocomotionRig& rig, std::span<const C
   return job;
 }
 
-LocomotionColumns locomotion_columns(SoaTable& walkers) {
-  return {u32_view(std::as_const(walkers), kWalkerPath),
+LocomotionColumns locomotion_columns(SoaTable& walkers, bool follow_agents) {
+  LocomotionColumns c{u32_view(std::as_const(walkers), kWalkerPath),
           f32_view(walkers, kWalkerGait),
           f32_view(walkers, kWalkerClock).columns(0, 1),
           f32_view(walkers, kWalkerPlacement),
           f32_view(walkers, kWalkerRootTranslation),
           f32_view(walkers, kWalkerLocalRotation),
           f32_view(walkers, kWalkerIkGoal),
-          i32_view(walkers, kWalkerIkMode)};
+          i32_view(walkers, kWalkerIkMode),
+          {}};
+  if (follow_agents) c.agent = f32_view(std::as_const(walkers), kWalkerAgent);
+  return c;
 }
 
 LocomotionJob make_locomotion_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths, SoaTable& walkers,
-                                  float dt, const GaitStyle& style) {
-  return {locomotion_columns(walkers), &rig, paths, &style, dt};
+                                  float dt, const GaitStyle& style, bool follow_agents) {
+  return {locomotion_columns(walkers, follow_agents), &rig, paths, &style, dt};
 }
 
 StartWalkingJob make_start_walking_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths,
-                                       SoaTable& walkers, std::size_t walker, const GaitStyle& style) {
-  return {locomotion_columns(walkers), &rig, paths, &style, walker};
+                                       SoaTable& walkers, std::size_t walker, const GaitStyle& style,
+                                       bool follow_agents) {
+  return {locomotion_columns(walkers, follow_agents), &rig, paths, &style, walker};
 }
 
 }  // namespace strata

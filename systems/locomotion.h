@@ -18,7 +18,12 @@
 // Cadence may change at any time: phase and distance integrate it, footprints are placed once at toe-off, so a
 // change never moves a planted foot or pops the pelvis.
 //
-//   reads:  rig (limbs, rest joint centres, reach, wrist paths), paths, style, dt, path (U32)
+// Walkers of a scenario crowd follow their steered agents instead of a path (agent mode, LocomotionColumns::agent):
+// the pelvis is at the agent's position and heading, footprints land where its velocity and turn rate predict the
+// pelvis at heel strike, a slower agent takes shorter steps at no less than agent_min_cadence, and an agent that
+// stops brings its feet together and stands (kGaitIdle), both feet flat, with a slow weight shift.
+//
+//   reads:  rig (limbs, rest joint centres, reach, wrist paths), paths, style, dt, path (U32); agent (agent mode)
 //   writes: gait (kGaitFloats, read and written), time (clock component 0), placement (5), root_translation (3),
 //           local_rotation of root, sacroiliac, spine and midtarsals, ik_goal (kIkLimbs*kIkGoalFloats),
 //           ik_mode (kIkLimbs, I32)
@@ -87,6 +92,20 @@ struct GaitStyle {
   float arm_swing = 0.17f;           // wrist travel forward/back at a 0.7 m step, scaled with step length
   float cadence_rate = 25.0f;        // how fast cadence eases to its target, steps/min per second
   float speed_period = 18.0f;        // seconds per cycle of the speed schedule
+
+  // ---- Walkers following steered agents (scenario crowds) ----
+  // How fast the body turns towards its velocity (rad/s). ~90 deg/s: a person turning on the spot takes two or
+  // three steps for a half turn; agent_move turns the agent at this rate and the walk predicts footprints with it.
+  float turn_rate = 1.6f;
+  // Lowest cadence of a walking agent (steps/min): at a crawl the gait formula's cadence falls to 40, slow motion;
+  // people easing to a stop or turning on the spot take short steps at a near-normal rate.
+  float agent_min_cadence = 80.0f;
+  float stand_speed = 0.08f;        // m/s: an agent slower than this that wants no faster stands still
+  float stand_feet_apart = 0.15f;   // m (rig scale): the feet are together when no further apart along the heading
+  float idle_settle = 0.4f;         // s to settle into the idle stance
+  float idle_release = 0.25f;       // s to leave it
+  float idle_sway = 0.008f;         // m: the standing weight shift from foot to foot
+  float idle_sway_period = 4.0f;    // s
 };
 
 // Rig-constant data the locomotion system needs, derived once from the skeleton.
@@ -117,9 +136,13 @@ struct LocomotionColumns {
   ColumnView<float> local_rotation;      // joints*4: root, sacroiliac, spine, midtarsal rotations written
   ColumnView<float> ik_goal;             // kIkLimbs*kIkGoalFloats: ankle and wrist goals, written
   ColumnView<std::int32_t> ik_mode;      // kIkLimbs: legs PositionOrientation, arms Position, written
+  // Agent mode when set (kAgentFloats, read): the pelvis follows the walker's steered agent (position, velocity,
+  // heading) instead of a path, and the walker stands when its agent stops; `path` and the paths are not read.
+  ColumnView<const float> agent;
 };
-// Views of those columns over every walker of `walkers` (a walker table, components/walker.h).
-LocomotionColumns locomotion_columns(SoaTable& walkers);
+// Views of those columns over every walker of `walkers` (a walker table, components/walker.h); with
+// `follow_agents` the agent view too.
+LocomotionColumns locomotion_columns(SoaTable& walkers, bool follow_agents = false);
 
 // Places walker `walker` at its gait distance along its path with its gait state consistent with its phase
 // (both feet on their footprints, the swing foot mid-arc), so the first frame needs no settling. Reads the gait
@@ -157,10 +180,11 @@ struct LocomotionJob : LocomotionColumns {
 // footprints, pelvis, rotations or goals. A walker going back to the whole walk restarts it with
 // StartWalkingJob, which derives feet and pelvis from the phase and distance. ~15x cheaper than walking.
 //
-//   reads:  rig (rig height), paths, style, dt, path (U32)
-//   writes: gait (time-keeping components: cadence, cadence target, phase, distance), time, placement (5)
+//   reads:  rig (rig height), paths, style, dt, path (U32); agent (agent mode)
+//   writes: gait (time-keeping components: cadence, cadence target, phase, distance, idle), time, placement (5)
 struct GaitAdvanceJob {
   ColumnView<const std::uint32_t> path;
+  ColumnView<const float> agent;  // agent mode when set, as LocomotionColumns::agent
   ColumnView<float> gait;
   ColumnView<float> time;
   ColumnView<float> placement;
@@ -176,11 +200,12 @@ struct GaitAdvanceJob {
 };
 // Over every walker of `walkers`: a walker table, wide or light (components/walker.h).
 GaitAdvanceJob make_gait_advance_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths,
-                                     SoaTable& walkers, float dt, const GaitStyle& style);
+                                     SoaTable& walkers, float dt, const GaitStyle& style, bool follow_agents = false);
 
 LocomotionJob make_locomotion_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths, SoaTable& walkers,
-                                  float dt, const GaitStyle& style);
+                                  float dt, const GaitStyle& style, bool follow_agents = false);
 StartWalkingJob make_start_walking_job(const LocomotionRig& rig, std::span<const CardinalSpline> paths,
-                                       SoaTable& walkers, std::size_t walker, const GaitStyle& style);
+                                       SoaTable& walkers, std::size_t walker, const GaitStyle& style,
+                                       bool follow_agents = false);
 
 }  // namespace strata

@@ -1,0 +1,82 @@
+#pragma once
+// Scenario crowds: walkers that are steered agents (components/scenario.h). What a crowd keeps for them — the
+// scenario, its navigation mesh and one Detour query, its obstacles for avoidance, the parameters and scratch of
+// the agent systems — and the frame's agents stage, which runs them in a fixed order before locomotion:
+//
+//   steer      systems/navigation.h   goals, corners -> preferred velocity, new goals, plan requests  per table
+//   plan       systems/navigation.h   a few agents' paths on the navigation mesh (staggered)          budgeted
+//   avoidance  systems/avoidance.h    every agent at once, in entity order -> collision-free velocity  gathered
+//   move       systems/agent_move.h   velocity turned and limited, position integrated                per table
+//
+// Avoidance sees every agent whatever table its walker sits in (meshes, impostors, culled): the stage gathers the
+// agents' columns into arrays ordered by entity index, so the result depends on the seed and never on tables or
+// threads, and scatters the velocities back.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "components/scenario.h"
+#include "nav/navmesh.h"
+#include "systems/agent_move.h"
+#include "systems/avoidance.h"
+#include "systems/navigation.h"
+
+namespace strata {
+
+struct Crowd;
+struct FrameProfile;
+class Profiler;
+
+struct CrowdAgents {
+  Scenario scenario;
+  std::vector<ScenarioGoal> goals;  // per spawn group
+  std::shared_ptr<const NavMesh> navmesh;
+  std::unique_ptr<NavQuery> query;
+  std::unique_ptr<ObstacleSet> obstacles;
+  AvoidanceParameters avoidance;
+  SteeringParameters steering;
+  AgentMoveParameters move;
+  // Avoidance keeps discs this much wider than the bodies: the body follows avoidance's velocity within turning
+  // and acceleration limits (systems/agent_move.h), and the margin absorbs the difference.
+  float radius_margin = 0.06f;
+  std::uint32_t plans_per_step = 24;  // most paths planned in one step (those without a path first)
+  double navigation_build_ms = 0;     // building (or loading) the navigation mesh
+
+  // Scratch of the avoidance gather, by entity order; grown, never shrunk.
+  AvoidanceScratch scratch;
+  std::vector<float> px, pz, vx, vz, pref_vx, pref_vz, radius, max_speed, new_vx, new_vz;
+  struct Row {
+    std::uint32_t table, row;
+  };
+  std::vector<Row> rows;
+  struct PlanCandidate {
+    float urgency;  // seconds overdue; a missing path counts as very overdue
+    std::uint32_t walker, table, row;
+  };
+  std::vector<PlanCandidate> candidates;
+  std::vector<std::uint32_t> plan_rows;
+  double last_plan_ms = 0, last_avoidance_ms = 0;
+  std::size_t last_plans = 0;
+};
+
+struct ScenarioSetup {
+  bool use_cache = true;  // navigation mesh cache on disk
+  std::size_t agents = 0; // 0: the scenario's counts; otherwise every group scaled so the total is about this
+};
+
+// Makes `crowd` the scenario's: builds the navigation mesh and the obstacles, and spawns every group's agents
+// standing at their spawn points facing their first goals (seeded from scenario.seed). A scenario with a track
+// spawns the stadium lane walk instead (scene/spawn.h). Throws std::invalid_argument when the rig cannot walk,
+// std::runtime_error when navigation cannot be built.
+void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& setup = {});
+
+// The agents' stages of step(), before locomotion: navigation (steer, then the staggered plans) and avoidance
+// (avoid, then move). No-ops for a crowd without agents.
+void run_navigation_stage(Crowd& crowd, float dt);
+void run_avoidance_stage(Crowd& crowd, float dt);
+
+// True when every agent has reached its goal at least once.
+bool all_agents_arrived(const Crowd& crowd);
+
+}  // namespace strata

@@ -1,0 +1,120 @@
+#include "systems/agent_move.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "components/walker.h"
+
+namespace strata {
+namespace {
+
+constexpr float kTwoPi = 6.28318530718f;
+float wrap_angle(float a) { return a - kTwoPi * std::round(a / kTwoPi); }
+
+void move_one(const AgentMoveJob& job, std::size_t i) {
+  const ColumnView<float>& a = job.agent;
+  const float dt = job.dt;
+  const AgentMoveParameters& p = job.params;
+  const float desired_x = a.at(kAgentOrcaVx, i), desired_z = a.at(kAgentOrcaVz, i);
+  const float desired_speed = std::hypot(desired_x, desired_z);
+  float heading = a.at(kAgentHeading, i);
+  float speed = std::hypot(a.at(kAgentVx, i), a.at(kAgentVz, i));
+  float dir_x = speed > 1e-6f ? a.at(kAgentVx, i) / speed : std::sin(heading);
+  float dir_z = speed > 1e-6f ? a.at(kAgentVz, i) / speed : std::cos(heading);
+  float target_speed = 0.0f;
+  if (job.gait.at(kGaitIdle, i) > 0.0f) {
+    // Leaving (or settling into) the idle stance: the feet are down side by side and the body waits for them.
+    speed = 0.0f;
+  } else if (desired_speed > 1e-4f) {
+    dir_x = desired_x / desired_speed;
+    dir_z = desired_z / desired_speed;
+    const float turn = wrap_angle(std::atan2(dir_x, dir_z) - heading);
+    const float most = p.turn_rate * dt;
+    heading = wrap_angle(heading + std::clamp(turn, -most, most));
+    // Facing away from where it should go, it slows (to a stop past 90 degrees) while it turns.
+    const float left = wrap_angle(std::atan2(dir_x, dir_z) - heading);
+    target_speed = desired_speed * std::max(std::cos(left), 0.0f);
+  }
+  const float change = target_speed - speed;
+  speed += std::clamp(change, -p.braking * dt, p.acceleration * dt);
+  speed = std::max(speed, 0.0f);
+  const float vx = dir_x * speed, vz = dir_z * speed;
+  a.at(kAgentVx, i) = vx;
+  a.at(kAgentVz, i) = vz;
+  a.at(kAgentPx, i) += vx * dt;
+  a.at(kAgentPz, i) += vz * dt;
+  a.at(kAgentHeading, i) = heading;
+
+  // Progress bookkeeping. An agent that has arrived and stands is not stuck.
+  a.at(kAgentTravelTime, i) += dt;
+  const float remaining = agent_path_distance(ColumnView<const float>(a), job.corners, i);
+  const bool arrived = (job.state.at(kAgentFlags, i) & kAgentArrived) != 0u &&
+                       std::hypot(a.at(kAgentGoalX, i) - a.at(kAgentPx, i), a.at(kAgentGoalZ, i) - a.at(kAgentPz, i)) <
+                           a.at(kAgentGoalRadius, i);
+  if (arrived || remaining < a.at(kAgentBestDistance, i) - p.progress_step) {
+    a.at(kAgentBestDistance, i) = remaining;
+    a.at(kAgentSinceProgress, i) = 0.0f;
+  } else {
+    a.at(kAgentSinceProgress, i) += dt;
+  }
+}
+
+}  // namespace
+
+float agent_path_distance(const ColumnView<const float>& agent, const ColumnView<const float>& corners, std::size_t i) {
+  const float px = agent.at(kAgentPx, i), pz = agent.at(kAgentPz, i);
+  const auto count = static_cast<std::uint32_t>(std::clamp(corners.at(kAgentCorners * 2, i), 0.0f,
+                                                           static_cast<float>(kAgentCorners)));
+  float d = 0.0f, x = px, z = pz;
+  for (std::uint32_t c = 0; c < count; ++c) {
+    const float cx = corners.at(2 * c, i), cz = corners.at(2 * c + 1, i);
+    d += std::hypot(cx - x, cz - z);
+    x = cx;
+    z = cz;
+  }
+  // Beyond the corners kept (or with none): straight on to the goal.
+  return d + std::hypot(agent.at(kAgentGoalX, i) - x, agent.at(kAgentGoalZ, i) - z);
+}
+
+bool AgentMoveJob::validate() const {
+  const std::size_t n = agent.count;
+  if (!agent.fits(n, kAgentFloats) || !corners.fits(n, kAgentCorners * 2 + 1) || !gait.fits(n, kGaitFloats) ||
+      !state.fits(n, kAgentInts))
+    return false;
+  if (agent.overlaps(corners) || agent.overlaps(gait) || agent.overlaps(state)) return false;
+  if (!std::isfinite(dt) || dt < 0.0f || !(params.turn_rate > 0.0f) || !(params.acceleration > 0.0f) ||
+      !(params.braking > 0.0f) || !(params.progress_step > 0.0f))
+    return false;
+  // A non-finite avoidance velocity would move the agent to NaN: refuse it rather than propagate.
+  for (std::size_t i = 0; i < n; ++i)
+    if (!std::isfinite(agent.at(kAgentOrcaVx, i)) || !std::isfinite(agent.at(kAgentOrcaVz, i))) return false;
+  return true;
+}
+
+bool AgentMoveJob::run() const {
+  if (!validate()) return false;
+  constexpr std::size_t kChunk = 512;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, agent.count, kChunk),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) move_one(*this, i);
+                    },
+                    tbb::simple_partitioner());
+  return true;
+}
+
+AgentMoveJob make_agent_move_job(SoaTable& walkers, float dt, const AgentMoveParameters& params) {
+  AgentMoveJob job;
+  job.agent = f32_view(walkers, kWalkerAgent);
+  job.corners = f32_view(std::as_const(walkers), kWalkerAgentCorners);
+  job.gait = f32_view(std::as_const(walkers), kWalkerGait);
+  job.state = u32_view(std::as_const(walkers), kWalkerAgentState);
+  job.params = params;
+  job.dt = dt;
+  return job;
+}
+
+}  // namespace strata

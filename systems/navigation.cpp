@@ -1,0 +1,220 @@
+#include "systems/navigation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "nav/navmesh.h"
+
+namespace strata {
+namespace {
+
+std::uint32_t xorshift(std::uint32_t& s) {
+  s ^= s << 13;
+  s ^= s >> 17;
+  s ^= s << 5;
+  return s;
+}
+float uniform(std::uint32_t& s) { return static_cast<float>(xorshift(s) >> 8) * (1.0f / 16777216.0f); }
+
+glm::vec2 random_in(glm::vec2 lo, glm::vec2 hi, std::uint32_t& rng) {
+  const float u = uniform(rng), v = uniform(rng);
+  return {lo.x + u * (hi.x - lo.x), lo.y + v * (hi.y - lo.y)};
+}
+
+glm::vec2 random_ground_point(glm::vec2 ground_min, glm::vec2 ground_max, std::uint32_t& rng) {
+  const glm::vec2 inset(std::min(1.0f, 0.25f * (ground_max.x - ground_min.x)),
+                        std::min(1.0f, 0.25f * (ground_max.y - ground_min.y)));
+  return random_in(ground_min + inset, ground_max - inset, rng);
+}
+
+void set_goal(const SteerJob& job, std::size_t i, glm::vec2 goal) {
+  const ColumnView<float>& a = job.agent;
+  a.at(kAgentGoalX, i) = goal.x;
+  a.at(kAgentGoalZ, i) = goal.y;
+  a.at(kAgentTravelTime, i) = 0.0f;
+  a.at(kAgentSinceProgress, i) = 0.0f;
+  a.at(kAgentBestDistance, i) = std::hypot(goal.x - a.at(kAgentPx, i), goal.y - a.at(kAgentPz, i));
+  job.corners.at(kAgentCorners * 2, i) = 0.0f;
+  job.state.at(kAgentFlags, i) |= kAgentNeedsPath;
+}
+
+void steer_one(const SteerJob& job, std::size_t i) {
+  const ColumnView<float>& a = job.agent;
+  const ColumnView<float>& c = job.corners;
+  const glm::vec2 pos(a.at(kAgentPx, i), a.at(kAgentPz, i));
+  glm::vec2 goal(a.at(kAgentGoalX, i), a.at(kAgentGoalZ, i));
+  const std::uint32_t group = std::min<std::uint32_t>(job.state.at(kAgentGroup, i),
+                                                      static_cast<std::uint32_t>(job.goals.size() - 1));
+  const ScenarioGoal& spec = job.goals[group];
+  a.at(kAgentReplanIn, i) -= job.dt;
+
+  // Arrival, and the next goal where the group has one.
+  if (glm::length(goal - pos) < a.at(kAgentGoalRadius, i)) {
+    job.state.at(kAgentFlags, i) |= kAgentArrived;
+    if (spec.kind == GoalKind::Waypoints && spec.points.size() >= 2) {
+      std::uint32_t& k = job.state.at(kAgentWaypoint, i);
+      k = (k + 1) % static_cast<std::uint32_t>(spec.points.size());
+      set_goal(job, i, spec.points[k]);
+      goal = spec.points[k];
+    } else if (spec.kind == GoalKind::Random) {
+      std::uint32_t& rng = job.state.at(kAgentSeed, i);
+      goal = random_ground_point(job.ground_min, job.ground_max, rng);
+      ++job.state.at(kAgentWaypoint, i);
+      set_goal(job, i, goal);
+    } else {
+      // A final goal: stand (the walk brings the feet together).
+      a.at(kAgentPrefVx, i) = 0.0f;
+      a.at(kAgentPrefVz, i) = 0.0f;
+      a.at(kAgentTargetX, i) = goal.x;
+      a.at(kAgentTargetZ, i) = goal.y;
+      return;
+    }
+  }
+
+  // Corners passed. The last corner is the goal (or the mesh point nearest it) and is kept until arrival.
+  auto count = static_cast<std::uint32_t>(std::clamp(c.at(kAgentCorners * 2, i), 0.0f, float(kAgentCorners)));
+  while (count > 1 && glm::length(glm::vec2(c.at(0, i), c.at(1, i)) - pos) < job.params.corner_reached) {
+    for (std::uint32_t k = 0; k + 1 < count; ++k) {
+      c.at(2 * k, i) = c.at(2 * k + 2, i);
+      c.at(2 * k + 1, i) = c.at(2 * k + 3, i);
+    }
+    --count;
+    c.at(kAgentCorners * 2, i) = static_cast<float>(count);
+    // The plan kept only the first corners; running low, ask for the rest.
+    if (count == 1 && glm::length(glm::vec2(c.at(0, i), c.at(1, i)) - goal) > 0.05f)
+      job.state.at(kAgentFlags, i) |= kAgentNeedsPath;
+  }
+  // Without a path yet (just spawned, or a new goal this step): straight at the goal until the planner answers.
+  const glm::vec2 target = count > 0 ? glm::vec2(c.at(0, i), c.at(1, i)) : goal;
+  const bool final_leg = count <= 1;
+  a.at(kAgentTargetX, i) = target.x;
+  a.at(kAgentTargetZ, i) = target.y;
+  const glm::vec2 to = target - pos;
+  const float distance = glm::length(to);
+  float speed = a.at(kAgentPrefSpeed, i);
+  if (final_leg && spec.kind != GoalKind::Waypoints && spec.kind != GoalKind::Random)
+    speed *= std::clamp(distance / job.params.slow_radius, 0.0f, 1.0f);
+  const glm::vec2 pref = distance > 1e-4f ? to * (speed / distance) : glm::vec2(0.0f);
+  a.at(kAgentPrefVx, i) = pref.x;
+  a.at(kAgentPrefVz, i) = pref.y;
+}
+
+bool agent_views_fit(const ColumnView<float>& agent, const ColumnView<std::uint32_t>& state,
+                     const ColumnView<float>& corners) {
+  const std::size_t n = agent.count;
+  return agent.fits(n, kAgentFloats) && state.fits(n, kAgentInts) && corners.fits(n, kAgentCorners * 2 + 1) &&
+         !agent.overlaps(corners) && !agent.overlaps(state) && !corners.overlaps(state);
+}
+
+}  // namespace
+
+glm::vec2 first_goal(const ScenarioGoal& goal, glm::vec2 spawn, glm::vec2 ground_min, glm::vec2 ground_max,
+                     std::uint32_t& rng, std::uint32_t& waypoint) {
+  waypoint = 0;
+  switch (goal.kind) {
+    case GoalKind::Point: return goal.points.empty() ? spawn : goal.points[0];
+    case GoalKind::Opposite: return goal.points.empty() ? -spawn : 2.0f * goal.points[0] - spawn;
+    case GoalKind::Region: return random_in(goal.region_min, goal.region_max, rng);
+    case GoalKind::Random: return random_ground_point(ground_min, ground_max, rng);
+    case GoalKind::Waypoints: {
+      float best = 1e30f;
+      for (std::size_t k = 0; k < goal.points.size(); ++k) {
+        const float d = glm::length(goal.points[k] - spawn);
+        if (d < best) {
+          best = d;
+          waypoint = static_cast<std::uint32_t>(k);
+        }
+      }
+      return goal.points.empty() ? spawn : goal.points[waypoint];
+    }
+  }
+  return spawn;
+}
+
+bool SteerJob::validate() const {
+  if (!agent_views_fit(agent, state, corners) || goals.empty() || !std::isfinite(dt) || dt < 0.0f) return false;
+  if (!(params.corner_reached > 0.0f) || !(params.slow_radius > 0.0f) || !(params.replan_period > 0.0f)) return false;
+  if (!(ground_max.x > ground_min.x) || !(ground_max.y > ground_min.y)) return false;
+  for (const ScenarioGoal& g : goals)
+    if ((g.kind == GoalKind::Waypoints && g.points.size() < 2) || !(g.arrive_radius > 0.0f)) return false;
+  return true;
+}
+
+bool SteerJob::run() const {
+  if (!validate()) return false;
+  constexpr std::size_t kChunk = 512;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, agent.count, kChunk),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) steer_one(*this, i);
+                    },
+                    tbb::simple_partitioner());
+  return true;
+}
+
+bool PlanJob::validate() const {
+  if (!query || !agent_views_fit(agent, state, corners) || goals.empty() || !(replan_period > 0.0f)) return false;
+  return std::all_of(rows.begin(), rows.end(), [&](std::uint32_t r) { return r < agent.count; });
+}
+
+bool PlanJob::run() const {
+  if (!validate()) return false;
+  for (const std::uint32_t i : rows) {
+    const glm::vec2 pos(agent.at(kAgentPx, i), agent.at(kAgentPz, i));
+    glm::vec2 goal(agent.at(kAgentGoalX, i), agent.at(kAgentGoalZ, i));
+    const NavPath path = query->find_path(pos, goal, kAgentCorners);
+    std::uint32_t& flags = state.at(kAgentFlags, i);
+    flags &= ~(kAgentNeedsPath | kAgentPartialPath);
+    if (!path.complete) flags |= kAgentPartialPath;
+    if (!path.complete && !path.corners.empty() && path.corners.size() < kAgentCorners &&
+        glm::length(path.corners.back() - goal) < 2.0f) {
+      // The goal lies just off the walkable mesh (inside an obstacle's margin, or a random point drawn on one):
+      // the nearest walkable point is as good, and an agent asked for the impossible would never arrive.
+      goal = path.corners.back();
+      agent.at(kAgentGoalX, i) = goal.x;
+      agent.at(kAgentGoalZ, i) = goal.y;
+      flags &= ~kAgentPartialPath;
+    }
+    const std::size_t n = std::min<std::size_t>(path.corners.size(), kAgentCorners);
+    for (std::size_t k = 0; k < n; ++k) {
+      corners.at(static_cast<std::uint32_t>(2 * k), i) = path.corners[k].x;
+      corners.at(static_cast<std::uint32_t>(2 * k + 1), i) = path.corners[k].y;
+    }
+    corners.at(kAgentCorners * 2, i) = static_cast<float>(n);
+    agent.at(kAgentReplanIn, i) = replan_period;
+  }
+  return true;
+}
+
+SteerJob make_steer_job(SoaTable& walkers, std::span<const ScenarioGoal> goals, glm::vec2 ground_min,
+                        glm::vec2 ground_max, const SteeringParameters& params, float dt) {
+  SteerJob job;
+  job.agent = f32_view(walkers, kWalkerAgent);
+  job.state = u32_view(walkers, kWalkerAgentState);
+  job.corners = f32_view(walkers, kWalkerAgentCorners);
+  job.goals = goals;
+  job.ground_min = ground_min;
+  job.ground_max = ground_max;
+  job.params = params;
+  job.dt = dt;
+  return job;
+}
+
+PlanJob make_plan_job(SoaTable& walkers, NavQuery& query, std::span<const std::uint32_t> rows,
+                      std::span<const ScenarioGoal> goals, float replan_period) {
+  PlanJob job;
+  job.query = &query;
+  job.agent = f32_view(walkers, kWalkerAgent);
+  job.state = u32_view(walkers, kWalkerAgentState);
+  job.corners = f32_view(walkers, kWalkerAgentCorners);
+  job.rows = rows;
+  job.goals = goals;
+  job.replan_period = replan_period;
+  return job;
+}
+
+}  // namespace strata
