@@ -19,5 +19,6 @@ void add_skin_report(CLI::App& report, int& exit_code);    // `strata report ski
 void add_muscle_report(CLI::App& report, int& exit_code);  // `strata report muscle`, apps/report_muscle.cpp
 void add_subdiv_report(CLI::App& report, int& exit_code);  // `strata report subdiv`, apps/report_subdiv.cpp
 void add_lod_report(CLI::App& report, int& exit_code);     // `strata report lod`, apps/report_lod.cpp
+void add_crowd_report(CLI::App& report, int& exit_code);   // `strata report crowd`, apps/report_crowd.cpp
 
 }  // namespace strata::cli

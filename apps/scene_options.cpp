@@ -83,8 +83,14 @@ nlohmann::json scene_inputs_json(const SceneOptions& o) {
 
 void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   add_input_limit_option(cmd);
-  cmd.add_option("--walkers,-n", o.walkers, "Number of walkers on the ground grid")->capture_default_str()
-      ->check(whole_in(1, 10'000'000, true));
+  cmd.add_option("--walkers,-n", o.walkers,
+                 "Number of walkers on the ground grid (with --scenario: scales the scenario's groups to about "
+                 "this many agents)")
+      ->capture_default_str()->check(whole_in(1, 10'000'000, true))
+      ->each([&o](const std::string&) { o.walkers_given = true; });
+  cmd.add_option("--scenario", o.scenario,
+                 "Crowd scenario: a shipped one (circle, crossing, bottleneck, plaza, track) or a scenario JSON "
+                 "file (docs/scenarios.md): agents with goals that navigate around obstacles and avoid each other");
   cmd.add_option("--motion", o.motion,
                  "What moves the walkers: 'walk' (walk generator along a track; the default), 'clip' (the "
                  "file's own animation) or FILE.bvh (motion capture retargeted onto the skeleton, feet locked by IK)");

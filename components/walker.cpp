@@ -6,7 +6,7 @@
 namespace strata {
 
 std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count,
-                                            std::uint32_t muscle_points) {
+                                            std::uint32_t muscle_points, bool agents) {
   if (joint_count == 0) throw std::invalid_argument("make_walker_table: a rig needs at least one joint");
   if (muscle_points == 1) throw std::invalid_argument("make_walker_table: an action line has at least 2 points");
   const std::uint32_t p = std::max<std::uint32_t>(muscle_points, 1);
@@ -25,9 +25,11 @@ std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t join
   fields[kWalkerGait] = {"gait", ScalarType::F32, kGaitFloats, 0.0f};
   fields[kWalkerPath] = {"path", ScalarType::U32, 1, 0.0f};
   fields[kWalkerFootLock] = {"foot_lock", ScalarType::F32, 2 * kLockFloats, -1.0f};
-  fields[kWalkerAgent] = {"agent", ScalarType::F32, kAgentFloats, 0.0f};
-  fields[kWalkerAgentState] = {"agent_state", ScalarType::U32, kAgentInts, 0.0f};
-  fields[kWalkerAgentCorners] = {"agent_corners", ScalarType::F32, kAgentCorners * 2 + 1, 0.0f};
+  // Agent fields have their width only in a scenario crowd's tables; elsewhere one unused column each (a field
+  // cannot be empty), so a lane walker's impostor row stays as narrow as before agents existed.
+  fields[kWalkerAgent] = {"agent", ScalarType::F32, agents ? kAgentFloats : 1u, 0.0f};
+  fields[kWalkerAgentState] = {"agent_state", ScalarType::U32, agents ? kAgentInts : 1u, 0.0f};
+  fields[kWalkerAgentCorners] = {"agent_corners", ScalarType::F32, agents ? kAgentCorners * 2 + 1 : 1u, 0.0f};
   fields[kWalkerMusclePoint] = {"muscle_point", ScalarType::F32, p * 3, 0.0f};
   fields[kWalkerMuscleFrame] = {"muscle_frame", ScalarType::F32, p * 6, 0.0f};
   fields[kWalkerMuscleLength] = {"muscle_length", ScalarType::F32, p, 0.0f};
@@ -35,10 +37,10 @@ std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t join
   return std::make_unique<SoaTable>(std::move(name), std::move(fields), 1);
 }
 
-std::unique_ptr<SoaTable> make_light_walker_table(std::string name) {
+std::unique_ptr<SoaTable> make_light_walker_table(std::string name, bool agents) {
   // The full table of a one-joint rig without muscles has width 4 rotations and 12 floats per matrix; narrowed to
   // one column each, which no full table of any rig has (a rig has joints, so rotations are >= 4 wide).
-  std::unique_ptr<SoaTable> full = make_walker_table("", 1, 0);
+  std::unique_ptr<SoaTable> full = make_walker_table("", 1, 0, agents);
   std::vector<FieldDesc> fields = full->fields();
   for (const std::uint32_t f : {kWalkerLocalRotation, kWalkerWorld, kWalkerSkinning, kWalkerIkGoal, kWalkerIkResult,
                                 kWalkerIkMode, kWalkerIkFlags, kWalkerFootLock, kWalkerMusclePoint, kWalkerMuscleFrame,

@@ -130,13 +130,16 @@ enum WalkerField : std::uint32_t {
 };
 
 // `muscle_points`: control points of the rig's muscle set (0, or >= 2 since a line has at least two).
+// `agents`: the agent fields (kWalkerAgent, kWalkerAgentState, kWalkerAgentCorners) get their width; without it
+// they are one unused column each.
 std::unique_ptr<SoaTable> make_walker_table(std::string name, std::uint32_t joint_count,
-                                            std::uint32_t muscle_points = 0);
+                                            std::uint32_t muscle_points = 0, bool agents = false);
 
 // A walker table with the same fields, of which only those a walker moving on without a pose needs have their
 // width: placement, clock, clip, root translation, gait and path. Every other field is one unused column (a field
 // cannot be empty). The impostors' table (scene/crowd.h): ~270 bytes a walker instead of a few kilobytes.
-std::unique_ptr<SoaTable> make_light_walker_table(std::string name);
+// Impostors of a scenario crowd keep steering: with `agents` the agent fields keep their width here too.
+std::unique_ptr<SoaTable> make_light_walker_table(std::string name, bool agents = false);
 // True when `table` was made by make_light_walker_table (its pose fields are one column wide).
 bool is_light_walker_table(const SoaTable& table);
 

@@ -7,6 +7,7 @@
 
 #include "render/body_pass.h"
 #include "render/ground_pass.h"
+#include "render/props_pass.h"
 #include "render/reference_pass.h"
 #include "render/render_target.h"
 #include "render/skeleton_pass.h"
@@ -21,6 +22,7 @@ struct CrowdRenderer::Impl {
   SkeletonPass skeleton;
   BodyPass body;
   GroundPass ground;
+  PropsPass props;
   std::optional<ReferencePass> reference;  // built on the benchmark's first call
   std::size_t triangles_drawn = 0;
   std::vector<glm::vec3> ground_points;  // scratch
@@ -37,6 +39,11 @@ RenderOptions& CrowdRenderer::options() { return impl_->options; }
 void CrowdRenderer::resize(int width, int height) { impl_->target.resize(width, height); }
 std::size_t CrowdRenderer::triangles_drawn() const { return impl_->triangles_drawn; }
 std::size_t CrowdRenderer::impostors_drawn() const { return impl_->body.impostors_drawn(); }
+void CrowdRenderer::set_props(std::uint64_t key, std::span<const PropVertex> triangles) {
+  if (triangles.empty()) impl_->props.clear();
+  else impl_->props.upload(key, triangles);
+}
+std::uint64_t CrowdRenderer::props_key() const { return impl_->props.empty() ? 0 : impl_->props.key(); }
 
 void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
                            const BodyDrawInput* bodies) {
@@ -69,6 +76,7 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
     }
     r.ground.draw(points, view, projection, o.ground_color, o.clear_color);
   }
+  r.props.draw(view, projection);
   if (o.draw_skeleton) r.skeleton.draw(input, view, projection, o);
   r.body.draw(bodies, view, projection, o.skin_color);
   r.triangles_drawn = r.body.triangles_drawn();

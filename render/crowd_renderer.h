@@ -21,6 +21,7 @@
 #include <glm/vec3.hpp>
 
 #include "render/body_source.h"
+#include "render/props_pass.h"
 #include "render/render_options.h"
 #include "render/skeleton_input.h"
 
@@ -57,6 +58,10 @@ class CrowdRenderer {
   std::size_t triangles_drawn() const;
   // Walkers drawn as impostors by the last render().
   std::size_t impostors_drawn() const;
+  // The scenario's props (render/props_pass.h), drawn after the ground in every frame from now on; uploaded only
+  // when `key` differs from the last. An empty list removes them.
+  void set_props(std::uint64_t key, std::span<const PropVertex> triangles);
+  std::uint64_t props_key() const;  // 0 when there are none
   // The render benchmark's reference (`strata bench --render`): walker 0 of `mesh` uploaded once as a static
   // mesh and drawn offsets.size() times in one glDrawElementsInstanced, each copy moved by its offset, into the
   // same target with the same material: raw instancing of the same triangles, with nothing streamed.

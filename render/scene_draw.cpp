@@ -1,3 +1,6 @@
+#include "components/fnv_hasher.h"
+#include "render/props_pass.h"
+#include "scene/crowd_agents.h"
 #include "render/scene_draw.h"
 
 #include <cmath>
@@ -37,7 +40,7 @@ std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd) {
   return inputs;
 }
 
-ImpostorBatch impostor_batch(const Crowd& crowd) {
+ImpostorBatch impostor_batch(const Crowd& crowd, std::vector<float>* standing_phase) {
   ImpostorBatch batch;
   const SoaTable& t = crowd.table(DetailSlot::Impostor);
   if (t.size() == 0 || !crowd.impostor_atlas) return batch;
@@ -49,6 +52,12 @@ ImpostorBatch impostor_batch(const Crowd& crowd) {
   batch.heading = placement + 3 * t.stride();
   batch.scale = placement + 4 * t.stride();
   batch.phase = t.f32(kWalkerGait, kGaitPhase).data();
+  if (standing_phase && crowd.agents) {
+    const std::span<const float> phase = t.f32(kWalkerGait, kGaitPhase), idle = t.f32(kWalkerGait, kGaitIdle);
+    standing_phase->resize(t.size());
+    for (std::size_t w = 0; w < t.size(); ++w) (*standing_phase)[w] = idle[w] > 0.5f ? 0.3f : phase[w];
+    batch.phase = standing_phase->data();
+  }
   batch.walker_count = t.size();
   return batch;
 }
@@ -127,6 +136,22 @@ std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamer
   std::vector<BodyDrawInput> bodies = body_draw_inputs(crowd);
   if (options.recolour) options.recolour(bodies);
   renderer.options().draw_skeleton = crowd.skin.level.is_none() || options.skeleton_overlay;
+  // A scenario's obstacles and goals, built once per scenario (keyed by its name, source and seed).
+  if (crowd.agents) {
+    const Scenario& sc = crowd.agents->scenario;
+    FnvHasher h;
+    h.bytes(sc.name.data(), sc.name.size());
+    h.bytes(sc.source.data(), sc.source.size());
+    h.value(sc.seed);
+    h.value(sc.obstacles.size());
+    const std::uint64_t key = h.h | 1u;
+    if (renderer.props_key() != key) {
+      const std::vector<PropVertex> props = scenario_props(sc);
+      renderer.set_props(key, props);
+    }
+  } else if (renderer.props_key() != 0) {
+    renderer.set_props(0, {});
+  }
   SkeletonDrawInput skeletons{&crowd.rig().skeleton, scratch.joints, with_joints};
   if (crowd.table(DetailSlot::Impostor).size() > 0) {
     // The first frame with impostors bakes (or loads) the rig's atlas: seconds once, then cached on disk.
@@ -134,7 +159,7 @@ std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamer
     impostor_feet(crowd, scratch.impostor_feet);
     skeletons.ground_points = scratch.impostor_feet;
     scratch.batches.assign(bodies.begin(), bodies.end());
-    scratch.batches.emplace_back(impostor_batch(crowd));
+    scratch.batches.emplace_back(impostor_batch(crowd, &scratch.impostor_phase));
     renderer.render(skeletons, camera.view(), camera.projection(aspect), BodyBatches(scratch.batches));
   } else {
     renderer.render(skeletons, camera.view(), camera.projection(aspect), bodies);

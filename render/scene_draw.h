@@ -23,7 +23,10 @@ namespace strata {
 std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd);
 // The crowd's impostors as the body pass draws them (no walkers until the crowd has an atlas:
 // render/impostor_bake.h ensure_impostor_atlas, which render_frame calls).
-ImpostorBatch impostor_batch(const Crowd& crowd);
+// `standing_phase`: where a scenario's agents stand (kGaitIdle), their impostors show the walk's phase with the feet
+// passing each other (0.3: the right foot beside the left) in a copy kept there, instead of the phase they
+// stopped at (a stride apart). Null: the phase column as it is.
+ImpostorBatch impostor_batch(const Crowd& crowd, std::vector<float>* standing_phase = nullptr);
 // Bounds of every skinned vertex drawn and of every impostor (its feet up to its stature); false when none.
 bool body_bounds(const Crowd& crowd, glm::vec3& lo, glm::vec3& hi);
 // Every posed walker's world-space joint positions, walker-major, table by table (the skeleton pass's input and
@@ -45,6 +48,7 @@ bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderSc
 struct RenderScratch {
   std::vector<glm::vec3> joints;
   std::vector<glm::vec3> impostor_feet;
+  std::vector<float> impostor_phase;
   std::vector<BodyBatch> batches;
 };
 

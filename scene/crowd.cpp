@@ -29,10 +29,27 @@ bool slot_is_light(DetailSlot slot, MotionSource source) {
 
 Crowd::~Crowd() = default;
 
-Crowd::Crowd(Rig r) {
+void Crowd::make_tables(bool agent_fields) {
+  const Rig& r = rig();
   const auto joints = static_cast<std::uint32_t>(r.skeleton.joint_count());
   const std::string name = r.name.empty() ? std::string("walkers") : r.name;
   const std::uint32_t muscle_points = r.muscles ? r.muscles->set.point_count : 0;
+  for (std::size_t s = 0; s < kDetailSlots; ++s) {
+    const std::string table_name = name + "." + slot_name(static_cast<DetailSlot>(s));
+    tables[s] = world.add_table(static_cast<DetailSlot>(s) == DetailSlot::Impostor
+                                    ? make_light_walker_table(table_name, agent_fields)
+                                    : make_walker_table(table_name, joints, muscle_points, agent_fields));
+  }
+}
+
+void Crowd::widen_for_agents() {
+  if (walker_count() != 0) throw std::logic_error("Crowd::widen_for_agents: the crowd already has walkers");
+  if (world.table(tables[0]).fields()[kWalkerAgent].width == kAgentFloats) return;
+  // The narrow tables stay in the world, empty; nothing iterates the world's tables except through `tables`.
+  make_tables(true);
+}
+
+Crowd::Crowd(Rig r) {
   if (r.muscles && (!r.body || r.muscles->levels.size() != r.body->levels.size()))
     throw std::invalid_argument("Crowd: the muscle layer is bound to " + std::to_string(r.muscles->levels.size()) +
                                 " body levels, the body has " + std::to_string(r.body ? r.body->levels.size() : 0));
@@ -41,12 +58,7 @@ Crowd::Crowd(Rig r) {
   // whatever table it moves to; except the impostors' table, which keeps only what a far walker needs. The culled
   // table stays wide although a walking crowd's culled walkers are light too: clip and capture crowds run their
   // culled walkers whole, and a walker leaving the view keeps its pose rows for the frame it comes back.
-  for (std::size_t s = 0; s < kDetailSlots; ++s) {
-    const std::string table_name = name + "." + slot_name(static_cast<DetailSlot>(s));
-    tables[s] = world.add_table(static_cast<DetailSlot>(s) == DetailSlot::Impostor
-                                    ? make_light_walker_table(table_name)
-                                    : make_walker_table(table_name, joints, muscle_points));
-  }
+  make_tables(false);
   try {
     motion.locomotion = std::make_unique<const LocomotionRig>(make_locomotion_rig(rig().skeleton));
   } catch (const std::exception& e) {

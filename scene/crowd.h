@@ -132,6 +132,9 @@ struct Crowd {
   // layer does not match its body.
   explicit Crowd(Rig rig);
   ~Crowd();
+  // Gives the agent fields their width in every table (a scenario crowd, scene/crowd_agents.h); the crowd must
+  // have no walker yet. Throws std::logic_error otherwise.
+  void widen_for_agents();
   Crowd(const Crowd&) = delete;
   Crowd& operator=(const Crowd&) = delete;
 
@@ -167,6 +170,9 @@ struct Crowd {
   const std::vector<LimbChain>& limbs() const;
   bool has_muscles() const { return rig().muscles != nullptr && rig().muscles->set.point_count > 0; }
   bool muscles_enabled() const { return skin.muscles_on && has_muscles(); }
+
+ private:
+  void make_tables(bool agent_fields);
 };
 
 }  // namespace strata

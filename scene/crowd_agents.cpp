@@ -110,6 +110,7 @@ void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& s
     spawn_crowd(crowd, config);
     return;
   }
+  crowd.widen_for_agents();
   auto agents = std::make_unique<CrowdAgents>();
   agents->scenario = scenario;
   for (const SpawnGroup& g : scenario.groups) agents->goals.push_back(g.goal);

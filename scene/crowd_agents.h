@@ -65,7 +65,7 @@ struct ScenarioSetup {
   std::size_t agents = 0; // 0: the scenario's counts; otherwise every group scaled so the total is about this
 };
 
-// Makes `crowd` the scenario's: builds the navigation mesh and the obstacles, and spawns every group's agents
+// Makes `crowd` (which must have no walkers yet) the scenario's: builds the navigation mesh and the obstacles, and spawns every group's agents
 // standing at their spawn points facing their first goals (seeded from scenario.seed). A scenario with a track
 // spawns the stadium lane walk instead (scene/spawn.h). Throws std::invalid_argument when the rig cannot walk,
 // std::runtime_error when navigation cannot be built.

@@ -1,5 +1,8 @@
 #include "scene/scene_setup.h"
 
+#include "io/scenario_file.h"
+#include "scene/crowd_agents.h"
+
 #include <tbb/info.h>
 
 #include <charconv>
@@ -142,7 +145,17 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   // walkers: under auto, walkers are spawned straight into the impostor table (scene/body_settings.h).
   set_skinning_mode(*scene, o.skinning);
   set_detail_level(*scene, o.level);
-  spawn_crowd(*scene, config);
+  if (!o.scenario.empty()) {
+    if (config.motion != MotionSource::Walk)
+      throw std::invalid_argument("--scenario: scenario agents walk; it cannot go with --motion clip, a capture, "
+                                  "--clip or --rest");
+    ScenarioSetup setup;
+    setup.use_cache = o.navigation_cache;
+    setup.agents = o.walkers_given ? o.walkers : 0;
+    set_scenario(*scene, resolve_scenario(o.scenario), setup);
+  } else {
+    spawn_crowd(*scene, config);
+  }
   if (o.level.is_mesh() && scene->rig().body && static_cast<std::size_t>(o.level.index()) >= scene->rig().body->levels.size())
     throw std::invalid_argument("--level " + o.level.name() + ": the body has " +
                                 std::to_string(scene->rig().body->levels.size()) +

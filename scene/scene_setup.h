@@ -30,6 +30,9 @@ struct SceneOptions {
   std::string binding_overrides;    // step-3 overrides file replacing the shipped ones (shipped body only)
   std::uint32_t mesh_budget = LodPolicy{}.mesh_budget;  // most walkers drawn as meshes under auto (0 = no cap)
   float impostor_px = LodPolicy{}.impostor_px;          // walkers shorter on screen are impostors under auto
+  std::string scenario;  // a shipped scenario's name or a scenario file (components/scenario.h); empty = none
+  bool walkers_given = false;  // --walkers was given: a scenario's groups are scaled to about `walkers` agents
+  bool navigation_cache = true;  // scenarios: keep navigation meshes in the disk cache
 };
 
 // Resolves --clip to a walker clip selector: a clip name or index, "all" (every clip at once, as an X3D browser

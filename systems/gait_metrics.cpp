@@ -101,7 +101,8 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
 
     const float height = l.gait[kGaitHeight * s + w];
     const GaitParameters gp = gait_parameters(height, std::clamp(cadence, kMinCadence, kMaxCadence));
-    const CardinalSpline& path = paths[l.path[w]];
+    // Walkers following agents have no path: their plant distances are an odometer, never wrapped.
+    const CardinalSpline* path = paths.empty() ? nullptr : &paths[std::min<std::size_t>(l.path[w], paths.size() - 1)];
     for (int leg = 0; leg < 2; ++leg) {
       LegTrack& t = track.legs[leg];
       const std::size_t base = kGaitLegs + static_cast<std::size_t>(leg) * kLegFloats;
@@ -118,7 +119,7 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
         const float plant = l.gait[(base + kLegPlantDistance) * s + w];
         if (t.seen_strike && !first_) {
           float measured = plant - t.plant_distance;
-          if (path.closed()) measured -= path.length() * std::floor(measured / path.length());
+          if (path && path->closed()) measured -= path->length() * std::floor(measured / path->length());
           const double mean_cadence = t.cadence_sum / std::max<std::uint32_t>(t.cadence_samples, 1);
           const double formula = 2.0 * 0.004 * mean_cadence * height;
           report_.stride_length_error_pct =

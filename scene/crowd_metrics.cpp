@@ -1,0 +1,116 @@
+#include "scene/crowd_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "components/walker.h"
+#include "scene/crowd.h"
+#include "scene/crowd_agents.h"
+
+namespace strata {
+
+void CrowdMetrics::observe(const Crowd& crowd, float dt) {
+  if (!crowd.agents) return;
+  ++report_.frames;
+  report_.seconds += dt;
+  x_.clear();
+  z_.clear();
+  r_.clear();
+  float max_radius = 0.0f;
+  for (std::size_t s = 0; s < kDetailSlots; ++s) {
+    const SoaTable& t = crowd.world.table(crowd.tables[s]);
+    for (std::uint32_t row = 0; row < t.size(); ++row) {
+      const std::uint32_t id = t.owner(row).index;
+      if (id >= tracks_.size()) tracks_.resize(id + 1);
+      AgentTrack& track = tracks_[id];
+      track.seen = true;
+      for (std::uint32_t c = 0; c < kAgentFloats; ++c)
+        if (!std::isfinite(t.f32(kWalkerAgent, c)[row])) ++report_.nan_count;
+      const float x = t.f32(kWalkerAgent, kAgentPx)[row], z = t.f32(kWalkerAgent, kAgentPz)[row];
+      const float r = t.f32(kWalkerAgent, kAgentRadius)[row];
+      const bool arrived = (t.u32(kWalkerAgentState, kAgentFlags)[row] & kAgentArrived) != 0u;
+      if (arrived && !track.arrived) {
+        track.arrived = true;
+        track.time_to_goal = t.f32(kWalkerAgent, kAgentTravelTime)[row];
+      }
+      if (!track.arrived && t.f32(kWalkerAgent, kAgentSinceProgress)[row] >= stuck_seconds_) track.stuck = true;
+      if (!std::isfinite(x) || !std::isfinite(z)) continue;
+      x_.push_back(x);
+      z_.push_back(z);
+      r_.push_back(r);
+      max_radius = std::max(max_radius, r);
+    }
+  }
+  // Pairs within reach: a uniform grid of cells one body wide, each agent tested against the cells around it.
+  const std::size_t n = x_.size();
+  report_.agents = std::max(report_.agents, n);
+  if (n < 2) return;
+  const float cell = std::max(2.0f * max_radius, 0.05f);
+  float min_x = x_[0], min_z = z_[0], max_x = x_[0], max_z = z_[0];
+  for (std::size_t i = 1; i < n; ++i) {
+    min_x = std::min(min_x, x_[i]);
+    max_x = std::max(max_x, x_[i]);
+    min_z = std::min(min_z, z_[i]);
+    max_z = std::max(max_z, z_[i]);
+  }
+  // Agents spread far apart would make a huge grid: cap it, cells then just hold more agents.
+  const auto cols = static_cast<std::size_t>(std::min(4096.0f, (max_x - min_x) / cell + 1.0f));
+  const auto rows = static_cast<std::size_t>(std::min(4096.0f, (max_z - min_z) / cell + 1.0f));
+  const float cw = std::max((max_x - min_x) / static_cast<float>(cols), cell);
+  const float ch = std::max((max_z - min_z) / static_cast<float>(rows), cell);
+  auto cell_of = [&](float x, float z) {
+    const auto cx = std::min(cols - 1, static_cast<std::size_t>((x - min_x) / cw));
+    const auto cz = std::min(rows - 1, static_cast<std::size_t>((z - min_z) / ch));
+    return cz * cols + cx;
+  };
+  cell_start_.assign(cols * rows + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell_of(x_[i], z_[i]) + 1];
+  for (std::size_t c = 0; c < cols * rows; ++c) cell_start_[c + 1] += cell_start_[c];
+  cell_items_.resize(n);
+  std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) cell_items_[fill[cell_of(x_[i], z_[i])]++] = static_cast<std::uint32_t>(i);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto cx = static_cast<std::ptrdiff_t>(std::min(cols - 1, static_cast<std::size_t>((x_[i] - min_x) / cw)));
+    const auto cz = static_cast<std::ptrdiff_t>(std::min(rows - 1, static_cast<std::size_t>((z_[i] - min_z) / ch)));
+    for (std::ptrdiff_t dz = -1; dz <= 1; ++dz) {
+      for (std::ptrdiff_t dx = -1; dx <= 1; ++dx) {
+        const std::ptrdiff_t x = cx + dx, z = cz + dz;
+        if (x < 0 || z < 0 || x >= static_cast<std::ptrdiff_t>(cols) || z >= static_cast<std::ptrdiff_t>(rows)) continue;
+        const std::size_t c = static_cast<std::size_t>(z) * cols + static_cast<std::size_t>(x);
+        for (std::uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+          const std::uint32_t j = cell_items_[k];
+          if (j <= i) continue;
+          const double d = std::hypot(static_cast<double>(x_[i]) - x_[j], static_cast<double>(z_[i]) - z_[j]);
+          const double clearance = d - r_[i] - r_[j];
+          if (!any_clearance_ || clearance < report_.min_clearance_m) report_.min_clearance_m = clearance;
+          any_clearance_ = true;
+          if (clearance < -tolerance_) ++report_.overlaps;
+        }
+      }
+    }
+  }
+}
+
+CrowdMetricsReport CrowdMetrics::report() const {
+  CrowdMetricsReport r = report_;
+  std::vector<float> times;
+  std::size_t seen = 0;
+  r.stuck_agents = 0;
+  for (const AgentTrack& t : tracks_) {
+    if (!t.seen) continue;
+    ++seen;
+    if (t.arrived) times.push_back(t.time_to_goal);
+    if (t.stuck) ++r.stuck_agents;
+  }
+  r.reached_goal_pct = seen > 0 ? 100.0 * static_cast<double>(times.size()) / static_cast<double>(seen) : 0.0;
+  if (!times.empty()) {
+    double sum = 0;
+    for (const float t : times) sum += t;
+    r.time_to_goal_mean_s = sum / static_cast<double>(times.size());
+    std::sort(times.begin(), times.end());
+    r.time_to_goal_p95_s = times[std::min(times.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(times.size())))];
+  }
+  return r;
+}
+
+}  // namespace strata
