@@ -29,8 +29,9 @@ struct NavBuildSettings {
   float max_slope_deg = 45.0f;
   float max_edge_length = 12.0f;
   float max_simplification_error = 1.1f;
-  // Cells per tile side. 0: automatic, one tile when the ground fits in 1024 x 1024 cells, else tiles of 256
-  // (a single heightfield for a 490 m ground at 0.1 m cells would hold 24 M cells at once).
+  // Cells per tile side. 0: automatic, one tile when the ground fits in 512 x 512 cells, else tiles of 256, built
+  // in parallel (one heightfield for a 490 m ground at 0.1 m cells would hold 24 M cells at once, and Recast's
+  // watershed slows down more than linearly with a tile's size).
   std::int32_t tile_size = 0;
 };
 

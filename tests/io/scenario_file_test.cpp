@@ -137,12 +137,12 @@ TEST(ScenarioFile, ResolvesNamesAndFiles) {
 }
 
 TEST(ScenarioFile, ClockwisePolygonsBecomeCounterClockwiseAndBoxesPolygons) {
-  const Scenario s = parse_scenario(
-      minimal(R"([{"count": 1, "spawn": {"shape": "rect", "min": [-9, -9], "max": [-8, -8]},
+  const Scenario s =
+      parse_scenario(minimal(R"([{"count": 1, "spawn": {"shape": "rect", "min": [-9, -9], "max": [-8, -8]},
                    "goal": {"kind": "point", "point": [9, 9]}}])",
-              R"(, "obstacles": [{"polygon": [[0, 0], [0, 2], [2, 2], [2, 0]]},
+                             R"(, "obstacles": [{"polygon": [[0, 0], [0, 2], [2, 2], [2, 0]]},
                                   {"box": {"center": [5, 0], "size": [2, 1], "angle_deg": 90}}])"),
-      "ok.json");
+                     "ok.json");
   ASSERT_EQ(s.obstacles.size(), 2u);
   EXPECT_GT(signed_area2(s.obstacles[0].points), 0.0);
   EXPECT_EQ(s.obstacles[0].points.size(), 4u);
@@ -151,7 +151,8 @@ TEST(ScenarioFile, ClockwisePolygonsBecomeCounterClockwiseAndBoxesPolygons) {
   EXPECT_NEAR(signed_area2(box), 2.0 * 2.0, 1e-4);  // twice the area of 2 x 1
   // Turned by 90 degrees: 1 m wide in x, 2 m deep in z.
   float lo_x = 1e9f, hi_x = -1e9f, lo_z = 1e9f, hi_z = -1e9f;
-  for (const glm::vec2& p : box) lo_x = std::min(lo_x, p.x), hi_x = std::max(hi_x, p.x), lo_z = std::min(lo_z, p.y), hi_z = std::max(hi_z, p.y);
+  for (const glm::vec2& p : box)
+    lo_x = std::min(lo_x, p.x), hi_x = std::max(hi_x, p.x), lo_z = std::min(lo_z, p.y), hi_z = std::max(hi_z, p.y);
   EXPECT_NEAR(hi_x - lo_x, 1.0f, 1e-5f);
   EXPECT_NEAR(hi_z - lo_z, 2.0f, 1e-5f);
   EXPECT_NEAR(0.5f * (lo_x + hi_x), 5.0f, 1e-5f);
@@ -231,6 +232,19 @@ TEST(ScenarioFile, BadInputNamesTheElement) {
   // A spawn rectangle over an obstacle.
   expect_error(minimal("[" + group_ok + "]", R"(, "obstacles": [{"box": {"center": [-4, -4], "size": [0.5, 0.5]}}])"),
                "/groups/0/spawn: overlaps /obstacles/0");
+  // Obstacles on a spawn circle: the agent at that angle is named, across the wrap at angle 0 too.
+  const std::string ring = R"([{"count": 20, "spawn": {"shape": "circle", "center": [0, 0], "radius": 5},
+                                "goal": {"kind": "random"}}])";
+  expect_error(minimal(ring, R"(, "obstacles": [{"box": {"center": [0, 5], "size": [0.5, 0.5]}}])"),
+               "/groups/0/spawn: overlaps /obstacles/0 (agent 5)");
+  expect_error(minimal(ring, R"(, "obstacles": [{"box": {"center": [-5, 0], "size": [0.5, 0.5]}}])"),
+               "/groups/0/spawn: overlaps /obstacles/0 (agent 10)");
+  expect_error(minimal(ring, R"(, "obstacles": [{"box": {"center": [5.2, 0.05], "size": [0.2, 0.2]}}])"),
+               "/groups/0/spawn: overlaps /obstacles/0 (agent 0)");
+  EXPECT_NO_THROW((void)parse_scenario(
+      minimal(ring, R"(, "obstacles": [{"box": {"center": [0, 0], "size": [4, 4]}}, {"box": {"center": [0, 6],
+                                         "size": [1, 0.4]}}])"),
+      "ok.json"));
   expect_error(minimal("[" + group_ok + "]", R"(, "ground": {"min": [1, 1], "max": [0, 0]})"), "/ground");
   expect_error(R"({"format": "strata-scenario", "version": 1, "track": {}, "groups": []})",
                "/groups: not allowed with \"track\"");

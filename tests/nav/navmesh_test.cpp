@@ -187,8 +187,10 @@ TEST(NavMesh, CacheRoundTripsAndRebuildsACorruptFile) {
   std::filesystem::resize_file(file, 20);
   EXPECT_FALSE(NavMesh::build(s, settings(), true)->info().from_cache);
   EXPECT_TRUE(NavMesh::build(s, settings(), true)->info().from_cache);
-  if (old) ::setenv("XDG_CACHE_HOME", saved.c_str(), 1);
-  else ::unsetenv("XDG_CACHE_HOME");
+  if (old)
+    ::setenv("XDG_CACHE_HOME", saved.c_str(), 1);
+  else
+    ::unsetenv("XDG_CACHE_HOME");
 }
 
 TEST(NavMesh, QueriesFromTwoThreadsAgree) {
