@@ -219,6 +219,32 @@ TEST(NavMesh, QueriesFromTwoThreadsAgree) {
   EXPECT_GT(complete, pairs.size() / 2);  // most random points are off the obstacles
 }
 
+TEST(NavMesh, WalkableObjReplacesTheGroundRectangle) {
+  // A 12 x 4 m floor at y = 0.5 (two triangles, normals up) in a 40 x 40 m ground rectangle: only the floor is
+  // walkable, and an obstacle is still cut out of it.
+  const test::TempDir tmp("navmesh_test");
+  {
+    std::ofstream obj(tmp / "floor.obj");
+    obj << "v -6 0.5 -2\nv 6 0.5 -2\nv 6 0.5 2\nv -6 0.5 2\nf 1 3 2\nf 1 4 3\n";
+  }
+  Scenario s;
+  s.name = "floor";
+  s.ground_min = glm::vec2(-20.0f);
+  s.ground_max = glm::vec2(20.0f);
+  s.walkable_obj = (tmp / "floor.obj").string();
+  s.obstacles.push_back(box({-0.5f, -2.5f}, {0.5f, 1.0f}));  // leaves a 1 m passage at z in [1, 2]
+  const auto mesh = NavMesh::build(s, settings(), false);
+  NavQuery q(*mesh);
+  EXPECT_FALSE(q.nearest_walkable({0.0f, 10.0f}, 1.0f).has_value());  // in the rectangle, off the floor
+  const NavPath p = q.find_path({-5.0f, 0.0f}, {5.0f, 0.0f}, 16);
+  ASSERT_TRUE(p.complete);
+  bool through_gap = false;
+  for (const glm::vec2& c : p.corners) through_gap = through_gap || c.y > 1.0f;
+  EXPECT_TRUE(through_gap);
+  s.walkable_obj = (tmp / "absent.obj").string();
+  EXPECT_THROW((void)NavMesh::build(s, settings(), false), std::runtime_error);
+}
+
 TEST(NavMesh, BadSettingsAndEmptyGeometry) {
   NavBuildSettings bad;
   bad.cell_size = 0.0f;
