@@ -679,6 +679,14 @@ NavPath NavQuery::find_path(glm::vec2 from, glm::vec2 to, std::size_t max_corner
       goal_ref = q.nearest(to, reach, goal);
     if (!goal_ref) return out;
   }
+  // In sight: the straight line, without A*. Besides being cheaper on open ground, this avoids the bends A*
+  // over large polygons leaves in a corridor (its cost runs through edge midpoints, so the corridor it picks need
+  // not contain the straight line: a circle path from (100, 30) to (-100, -30) came back with a 3 m detour).
+  if (goal_reachable && q.ray_clear({start[0], start[2]}, {goal[0], goal[2]})) {
+    out.corners.emplace_back(goal[0], goal[2]);
+    out.complete = true;
+    return out;
+  }
   int count = 0;
   const dtStatus status =
       q.query->findPath(start_ref, goal_ref, start, goal, &q.filter, q.path.data(), &count, kMaxPathPolys);
@@ -691,7 +699,12 @@ NavPath NavQuery::find_path(glm::vec2 from, glm::vec2 to, std::size_t max_corner
     if (dtStatusFailed(q.query->closestPointOnPoly(q.path[static_cast<std::size_t>(count - 1)], goal, end, nullptr)))
       return out;
   }
-  const int max_points = static_cast<int>(std::min<std::size_t>(std::max<std::size_t>(max_corners, 1), 1 << 16)) + 1;
+  // Detour's string pulling keeps a corner wherever the straight line passes exactly through a polygon vertex
+  // (tile seams on open ground do this: the circle's diagonal paths came back with 4 collinear corners). Those
+  // are dropped below, so more points are asked for than corners returned; a path with more real corners than
+  // that is simply cut, as max_corners allows.
+  const std::size_t wanted = std::min<std::size_t>(std::max<std::size_t>(max_corners, 1), 1 << 16);
+  const int max_points = static_cast<int>(2 * wanted + 8);
   q.straight.resize(static_cast<std::size_t>(max_points) * 3);
   q.straight_refs.resize(static_cast<std::size_t>(max_points));
   q.straight_flags.resize(static_cast<std::size_t>(max_points));
@@ -699,8 +712,33 @@ NavPath NavQuery::find_path(glm::vec2 from, glm::vec2 to, std::size_t max_corner
   if (dtStatusFailed(q.query->findStraightPath(start, end, q.path.data(), count, q.straight.data(),
                                                q.straight_flags.data(), q.straight_refs.data(), &points, max_points)))
     return out;
-  // The first point is the (snapped) start; the corners follow it.
-  for (int i = 1; i < points; ++i) out.corners.emplace_back(q.straight[i * 3], q.straight[i * 3 + 2]);
+  // The first point is the (snapped) start; the corners follow it. A corner within 1 mm of the line from the
+  // last kept point to the next one, and between them, is not a turn.
+  glm::vec2 prev(q.straight[0], q.straight[2]);
+  for (int i = 1; i < points && out.corners.size() < wanted; ++i) {
+    const glm::vec2 c(q.straight[i * 3], q.straight[i * 3 + 2]);
+    if (i + 1 < points) {
+      const glm::vec2 next(q.straight[(i + 1) * 3], q.straight[(i + 1) * 3 + 2]);
+      const glm::vec2 d = next - prev, e = c - prev;
+      const float len = std::sqrt(d.x * d.x + d.y * d.y);
+      const float along = len > 0.0f ? (d.x * e.x + d.y * e.y) / len : -1.0f;
+      if (len > 0.0f && std::fabs(d.x * e.y - d.y * e.x) / len < 1e-3f && along > 0.0f && along < len) continue;
+    }
+    out.corners.push_back(c);
+    prev = c;
+  }
+  // The same bends further along: a corner is dropped when the point after it is in sight of the one before
+  // (one greedy pass, a ray cast per corner; the start and the kept corners are on the mesh).
+  if (out.corners.size() >= 2) {
+    std::vector<glm::vec2> kept;
+    glm::vec2 from(start[0], start[2]);
+    for (std::size_t i = 0; i < out.corners.size(); ++i) {
+      if (i + 1 < out.corners.size() && q.ray_clear(from, out.corners[i + 1])) continue;
+      kept.push_back(out.corners[i]);
+      from = out.corners[i];
+    }
+    out.corners = std::move(kept);
+  }
   if (out.corners.empty()) out.corners.emplace_back(end[0], end[2]);
   out.complete = goal_reachable && !partial;
   return out;

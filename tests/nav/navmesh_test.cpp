@@ -88,6 +88,18 @@ TEST(NavMesh, OpenGroundPathIsStraight) {
   EXPECT_NEAR(p.corners[0].x, 7.0f, 1e-3f);
   EXPECT_NEAR(p.corners[0].y, 8.0f, 1e-3f);
   EXPECT_TRUE(q.walkable_line({-8.0f, -7.0f}, {7.0f, 8.0f}));
+  // Tiled (4 x 4 tiles of 64 cells), across the seams and through tile corners: still one corner, and the
+  // tiled mesh answers like the single tile.
+  NavBuildSettings tiled = settings();
+  tiled.tile_size = 64;
+  const auto tiles = NavMesh::build(s, tiled, false);
+  NavQuery tq(*tiles);
+  for (const glm::vec2 from : {glm::vec2(-8.0f, -7.0f), glm::vec2(-9.0f, -9.0f), glm::vec2(3.0f, -9.0f)}) {
+    const NavPath t = tq.find_path(from, -from, 8);
+    EXPECT_TRUE(t.complete);
+    EXPECT_EQ(t.corners.size(), 1u) << from.x << ", " << from.y;
+  }
+  EXPECT_GT(tiles->polygons().size(), mesh->polygons().size());
   // The ground's edge is eroded by the radius.
   EXPECT_FALSE(q.nearest_walkable({-10.0f, 0.0f}, 0.2f).has_value());
   EXPECT_TRUE(q.nearest_walkable({-9.3f, 0.0f}, 0.05f).has_value());
