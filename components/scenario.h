@@ -11,8 +11,11 @@
 
 namespace strata {
 
-// A closed polygon on the ground (x, z), counter-clockwise seen from above (+Y), at least 3 points, simple
-// (no self-intersection). The loader turns boxes into polygons and reorders clockwise input.
+// A closed polygon on the ground (x, z), at least 3 points, simple (no self-intersection), counter-clockwise in
+// the (x, z) plane read as a 2-D (x, y) plane: its signed area, sum of x_i z_(i+1) - x_(i+1) z_i, is positive (the
+// convention of 2-D geometry code such as ORCA's obstacle edges). Note that with y up, seen from above (+Y) with
+// +x to the right, +z points down the screen, so such a polygon looks clockwise there. The loader turns boxes
+// into polygons and reorders input of the other orientation.
 struct ScenarioPolygon {
   std::vector<glm::vec2> points;
 };

@@ -25,6 +25,7 @@ add_library(strata_fuzz_loaders STATIC
   rig/binding.cpp
   rig/harmonic_weights.cpp
   io/muscle_file.cpp
+  io/scenario_file.cpp
   rig/muscle_binding.cpp
   ${STRATA_EMBED_CPP})
 target_include_directories(strata_fuzz_loaders PUBLIC ${CMAKE_CURRENT_SOURCE_DIR})
@@ -35,7 +36,7 @@ target_link_libraries(strata_fuzz_loaders
   PRIVATE pugixml::pugixml nlohmann_json::nlohmann_json TinyGLTF::TinyGLTF TBB::tbb)
 
 # One target per loader.
-set(STRATA_FUZZ_TARGETS hanim obj bvh gltf makehuman binding muscle)
+set(STRATA_FUZZ_TARGETS hanim obj bvh gltf makehuman binding muscle scenario)
 add_custom_target(strata_fuzz_all)
 foreach(target ${STRATA_FUZZ_TARGETS})
   add_executable(fuzz_${target} fuzz/fuzz_${target}.cpp)

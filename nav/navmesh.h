@@ -29,7 +29,10 @@ struct NavBuildSettings {
   float max_slope_deg = 45.0f;
   float max_edge_length = 12.0f;
   float max_simplification_error = 1.1f;
-  std::int32_t tile_size = 0;  // 0: one tile
+  // Cells per tile side. 0: automatic, one tile when the ground fits in 512 x 512 cells, else tiles of 256, built
+  // in parallel (one heightfield for a 490 m ground at 0.1 m cells would hold 24 M cells at once, and Recast's
+  // watershed slows down more than linearly with a tile's size).
+  std::int32_t tile_size = 0;
 };
 
 struct NavBuildInfo {
@@ -58,12 +61,16 @@ class NavQuery {
   NavQuery(const NavQuery&) = delete;
   NavQuery& operator=(const NavQuery&) = delete;
   // Path on the ground from `from` to `to`; at most `max_corners` corners (the rest are found by the next
-  // query). Start and goal off the mesh are snapped to the nearest walkable point within a few metres; no
-  // walkable point near the start gives an empty path with complete = false. Never throws on geometry.
+  // query). Start and goal off the mesh are snapped to the nearest walkable point within 3 m (the last corner is
+  // then the snapped goal, and the path is complete); a goal further off gives a path towards the mesh point
+  // nearest it with complete = false; no walkable point within 3 m of the start (or a non-finite input) gives an
+  // empty path with complete = false. Never throws on geometry.
   NavPath find_path(glm::vec2 from, glm::vec2 to, std::size_t max_corners = 8);
   // The walkable point nearest `p` (within `search` metres), if any.
   std::optional<glm::vec2> nearest_walkable(glm::vec2 p, float search = 2.0f);
   // Whether the straight segment from a to b stays on the walkable mesh (a visibility test for skipping corners).
+  // `a` must be on the mesh; a segment running along the mesh boundary (corner to corner of a path) counts as
+  // walkable: the test allows 5 mm of sideways slack.
   bool walkable_line(glm::vec2 a, glm::vec2 b);
 
  private:

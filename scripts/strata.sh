@@ -26,6 +26,7 @@ PACKAGES=(
   libgtest-dev libbenchmark-dev libmeshoptimizer-dev libimgui-dev zlib1g-dev
   xvfb xauth
   ffmpeg
+  librecast-dev
 )
 
 install_missing() {
@@ -87,7 +88,7 @@ sanitize() {
   env -u DISPLAY ctest --output-on-failure -j "$JOBS" -E '^install_consumer$' -LE soak "$@"
 }
 
-FUZZ_TARGETS=(hanim obj bvh gltf makehuman binding muscle)
+FUZZ_TARGETS=(hanim obj bvh gltf makehuman binding muscle scenario)
 fuzz() {
   local seconds="${1:-20}"
   [ $# -gt 0 ] && shift

@@ -14,7 +14,8 @@ function(run_step)
 endfunction()
 
 run_step(${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${prefix}")
-foreach(f bin/strata lib/cmake/Strata/StrataConfig.cmake include/strata/io/hanim_loader.h share/strata/default_skeleton.x3d)
+foreach(f bin/strata lib/cmake/Strata/StrataConfig.cmake include/strata/io/hanim_loader.h share/strata/default_skeleton.x3d
+        include/strata/nav/navmesh.h share/strata/scenarios/bottleneck.json)
   if(NOT EXISTS "${prefix}/${f}")
     file(GLOB_RECURSE found RELATIVE "${prefix}" "${prefix}/*")
     message(FATAL_ERROR "install is missing ${f}; it has: ${found}")
@@ -24,7 +25,7 @@ run_step(${CMAKE_COMMAND} -S "${SOURCE_DIR}/tests/install_consumer" -B "${WORK_D
          -DCMAKE_BUILD_TYPE=Release "-DCMAKE_PREFIX_PATH=${prefix}")
 run_step(${CMAKE_COMMAND} --build "${WORK_DIR}/build")
 run_step("${WORK_DIR}/build/consumer")
-if(NOT step_output MATCHES "25 joints, 4 walkers")
+if(NOT step_output MATCHES "25 joints, 4 walkers" OR NOT step_output MATCHES "bottleneck passable")
   message(FATAL_ERROR "consumer printed: ${step_output}")
 endif()
 run_step("${prefix}/bin/strata" info "${prefix}/share/strata/default_skeleton.x3d")

@@ -24,6 +24,7 @@
 #include "io/muscle_file.h"
 #include "io/makehuman.h"
 #include "io/obj.h"
+#include "io/scenario_file.h"
 #include "rig/binding.h"
 
 namespace strata {
@@ -71,6 +72,7 @@ const std::map<std::string, std::function<void(const std::string&, const std::st
          const MuscleSet set = parse_muscles(parts[0], name, skeleton);
          (void)parse_muscle_overrides(parts[1], name, set);
        }},
+      {"scenario", [](const std::string& b, const std::string& name) { (void)parse_scenario(b, name); }},
   };
   return t;
 }
