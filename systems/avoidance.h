@@ -10,6 +10,8 @@
 //   reads:  position (x, z), velocity, preferred velocity, radius, max speed, the obstacle edges
 //   writes: new velocity (x, z)
 // Written from the paper; RVO2's source was not used.
+#include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -18,47 +20,92 @@
 
 namespace strata {
 
+// Fixed capacities of the per-agent linear program, so run() keeps its half-planes on the stack and never
+// allocates. validate() refuses max_neighbors above kAvoidanceMaxNeighbors; an agent with more obstacle edges in
+// reach than kAvoidanceMaxObstacleEdges keeps the nearest ones (ties by edge index).
+inline constexpr std::uint32_t kAvoidanceMaxNeighbors = 64;
+inline constexpr std::uint32_t kAvoidanceMaxObstacleEdges = 32;
+
+// Bounds validate() holds the inputs to, far beyond any crowd, so that every intermediate (relative positions
+// over a time step, squared distances) stays finite in float.
+inline constexpr float kAvoidanceMaxCoordinate = 1.0e6f;  // m
+inline constexpr float kAvoidanceMaxSpeed = 1.0e4f;       // m/s, for velocities, preferred velocities, max speed
+inline constexpr float kAvoidanceMaxRadius = 1.0e3f;      // m
+
 struct AvoidanceParameters {
   float time_horizon = 2.0f;           // s: neighbours closer in time than this constrain the velocity
   float obstacle_time_horizon = 0.6f;  // s: the same for static edges
-  float neighbor_distance = 4.0f;      // m: neighbours farther than this are not considered
-  std::uint32_t max_neighbors = 12;    // nearest ones kept
+  float neighbor_distance = 4.0f;      // m: neighbours farther than this (centre to centre) are not considered
+  std::uint32_t max_neighbors = 12;    // nearest ones kept (ties by index), at most kAvoidanceMaxNeighbors
   float dt = 1.0f / 30.0f;             // s: the step; overlapping agents are pushed apart within one step
 };
 
-// Static obstacles as directed edges (a polygon's boundary, counter-clockwise, so the free side is on the right
-// of each edge... see avoidance.cpp for the convention), with a grid for the edges near an agent. Built once per
-// scenario.
+// Static obstacles: solid, non-walkable polygons on the ground, kept as directed edges with a grid for the edges
+// near an agent. Built once per scenario.
+//
+// Edge convention: inside ObstacleSet every polygon is oriented so that its interior lies on the LEFT of each edge
+// a -> b in the (x, z) plane read as ordinary (x, y) axes (positive shoelace area), i.e. the free side is on the
+// right, outward normal (direction.y, -direction.x). A polygon given the other way round is reversed on
+// construction, so either winding is accepted. (Beware: "counter-clockwise seen from above" with y up is
+// clockwise in (x, z) read as (x, y), because +z points towards the viewer's bottom when looking down -y; the
+// signed area, not the caller's word, decides.) Consecutive duplicate points are dropped; collinear points are
+// kept as separate edges; a polygon of zero area (all points on one line) is a thin wall with both faces.
 class ObstacleSet {
  public:
   ObstacleSet() = default;
-  // Polygons on the ground, counter-clockwise (x, z); throws std::invalid_argument for a polygon under 3 points
-  // or a non-finite coordinate.
+  // Polygons on the ground (x, z); throws std::invalid_argument for a polygon under 3 points (after dropping
+  // repeated points), a non-finite coordinate or one beyond kAvoidanceMaxCoordinate, or a cell size that is not
+  // finite and positive.
   explicit ObstacleSet(const std::vector<std::vector<glm::vec2>>& polygons, float cell_size = 2.0f);
-  bool empty() const;
-  // ...implementation-defined accessors
+  bool empty() const { return edges_.empty(); }
+
   struct Edge {
-    glm::vec2 a, b;        // from a to b
+    glm::vec2 a, b;        // from a to b; the polygon's interior is on the left
     glm::vec2 direction;   // unit (b - a)
-    bool convex_at_a = true;
-    std::uint32_t prev = 0, next = 0;  // neighbouring edges of the same polygon
+    float length = 0.0f;   // |b - a| > 0
+    bool convex_at_a = true;  // the polygon's corner at a turns left (or goes straight): convex seen from inside
+    std::uint32_t prev = 0, next = 0;  // neighbouring edges of the same polygon: prev ends at a, next starts at b
   };
   const std::vector<Edge>& edges() const { return edges_; }
+
   // Edges whose grid cells overlap the square of half-size `reach` around p; appended to `out` (sorted, unique).
+  // For tools and tests; the job uses for_each_edge_near, which allocates nothing.
   void edges_near(glm::vec2 p, float reach, std::vector<std::uint32_t>& out) const;
 
+  // Calls visit(edge index) for every edge registered in a grid cell overlapping the square of half-size `reach`
+  // around p. An edge spanning several cells is visited once per cell: callers deduplicate.
+  template <class Visit>
+  void for_each_edge_near(glm::vec2 p, float reach, Visit&& visit) const {
+    if (cols_ == 0) return;
+    std::uint32_t x0, x1, z0, z1;
+    if (!cell_span(p, reach, x0, x1, z0, z1)) return;
+    for (std::uint32_t z = z0; z <= z1; ++z)
+      for (std::uint32_t x = x0; x <= x1; ++x) {
+        const std::size_t cell = static_cast<std::size_t>(z) * cols_ + x;
+        for (std::uint32_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) visit(cell_edges_[k]);
+      }
+  }
+
  private:
+  // The inclusive cell range overlapping the square; false when it misses the grid.
+  bool cell_span(glm::vec2 p, float reach, std::uint32_t& x0, std::uint32_t& x1, std::uint32_t& z0,
+                 std::uint32_t& z1) const;
+
   std::vector<Edge> edges_;
   glm::vec2 origin_{0.0f};
   float cell_ = 2.0f;
   std::uint32_t cols_ = 0, rows_ = 0;
-  std::vector<std::uint32_t> cell_start_, cell_edges_;
+  std::vector<std::uint32_t> cell_start_, cell_edges_;  // CSR: cell c's edges are cell_edges_[start[c], start[c+1])
 };
 
-// Scratch reused between steps (the neighbour grid); one per crowd.
+// Scratch reused between steps (the neighbour grid, rebuilt by a counting sort each run); one per crowd. Grown,
+// never shrunk, so a crowd of steady size allocates only on its first step. run() is the only writer: one job at
+// a time per scratch.
 struct AvoidanceScratch {
-  std::vector<std::uint32_t> cell_start, cell_agents;
-  // ... whatever the implementation needs, grown never shrunk
+  std::vector<std::uint32_t> cell_start;   // CSR offsets, cells + 1
+  std::vector<std::uint32_t> cell_agents;  // agent indices in cell order (stable: ascending index within a cell)
+  std::vector<std::uint32_t> agent_cell;   // each agent's cell
+  std::vector<float> sorted_x, sorted_z;   // positions in cell order, so a cell's scan reads contiguous memory
 };
 
 struct AvoidanceJob {
@@ -73,13 +120,17 @@ struct AvoidanceJob {
   AvoidanceParameters params;
   AvoidanceScratch* scratch = nullptr;
 
-  // Every span the same length, outputs not aliasing inputs, parameters positive and finite, scratch set; inputs
-  // finite (a non-finite agent is rejected, not propagated).
+  // Every span the same length, outputs not aliasing inputs or each other, parameters positive and finite
+  // (max_neighbors 1..kAvoidanceMaxNeighbors), scratch set; inputs finite and within the kAvoidanceMax* bounds,
+  // radius > 0, max_speed >= 0 (a non-finite agent is rejected, not propagated). No side effects.
   bool validate() const;
+  // validate() first; false and nothing written when invalid. Every written velocity is finite and no longer than
+  // the agent's max_speed.
   bool run() const;
 };
 
-// The scalar twin for tests: the same maths, one agent at a time, neighbours by brute force.
+// The scalar twin for tests: the same maths, one agent at a time, neighbours and obstacle edges by brute force,
+// serial; ignores `scratch` (may be null). Its output equals run()'s bit for bit.
 bool run_avoidance_reference(const AvoidanceJob& job);
 
 }  // namespace strata

@@ -170,10 +170,11 @@ bool PlanJob::run() const {
     std::uint32_t& flags = state.at(kAgentFlags, i);
     flags &= ~(kAgentNeedsPath | kAgentPartialPath);
     if (!path.complete) flags |= kAgentPartialPath;
-    if (!path.complete && !path.corners.empty() && path.corners.size() < kAgentCorners &&
-        glm::length(path.corners.back() - goal) < 2.0f) {
-      // The goal lies just off the walkable mesh (inside an obstacle's margin, or a random point drawn on one):
-      // the nearest walkable point is as good, and an agent asked for the impossible would never arrive.
+    if (!path.corners.empty() && path.corners.size() < kAgentCorners &&
+        glm::length(path.corners.back() - goal) > 0.01f && glm::length(path.corners.back() - goal) < 2.0f) {
+      // The goal lies just off the walkable mesh (inside an obstacle's margin, or a random point drawn on one) and
+      // the path ends at the mesh point nearest it: as good a goal, and an agent asked for a point it cannot stand
+      // on would never arrive. Further off, the goal stays, and the agent is rightly reported stuck.
       goal = path.corners.back();
       agent.at(kAgentGoalX, i) = goal.x;
       agent.at(kAgentGoalZ, i) = goal.y;
