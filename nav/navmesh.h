@@ -8,8 +8,9 @@
 // cores. Recast/Detour come from Debian's librecast-dev and stay out of this header (pimpl), so consumers of
 // the installed library need neither its headers nor its link line.
 //
-// Queries are const and may run from several threads at once: each thread takes its own NavQuery (Detour's
-// dtNavMeshQuery keeps per-query node pools, which is why a query object is not shared).
+// A NavMesh is immutable once built and may be shared by any number of threads; queries run from several
+// threads at once when each thread takes its own NavQuery (Detour's dtNavMeshQuery keeps per-query node pools,
+// which is why a query object is not shared).
 #include <cstdint>
 #include <memory>
 #include <optional>
