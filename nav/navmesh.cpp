@@ -402,7 +402,8 @@ std::optional<MeshFile> load_cache(const std::filesystem::path& file, std::uint6
   for (std::uint32_t i = 0; i < count; ++i) {
     TileData t;
     std::uint32_t size = 0;
-    if (!get(t.tx) || !get(t.ty) || !get(size) || bytes.size() - at < size) return std::nullopt;
+    if (!get(t.tx) || !get(t.ty) || !get(size) || bytes.size() - at < size || size < sizeof(dtMeshHeader))
+      return std::nullopt;
     t.bytes.assign(bytes.begin() + static_cast<std::ptrdiff_t>(at),
                    bytes.begin() + static_cast<std::ptrdiff_t>(at + size));
     at += size;

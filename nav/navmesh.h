@@ -2,11 +2,15 @@
 // Global navigation for a scenario: a Recast navigation mesh built from the scenario's walkable ground (its
 // rectangle or its walkable OBJ) with the static obstacles cut out and eroded by the agent radius, and Detour
 // queries over it (polygon path + string pulling into corners). Built once per scenario geometry and agent radius
-// and cached on disk beside the other caches ($XDG_CACHE_HOME/strata, keyed by a hash of the geometry and the
-// build settings). Recast/Detour come from Debian's librecast-dev.
+// and cached on disk beside the other caches ($XDG_CACHE_HOME/strata/navmesh_<key>.bin, else ~/.cache/strata,
+// keyed by a hash of the geometry, the build settings and a format version; a stale, truncated or corrupt file is
+// rebuilt; STRATA_NO_NAV_CACHE=1 turns the cache off). Grounds over 512 cells a side are built as tiles on all
+// cores. Recast/Detour come from Debian's librecast-dev and stay out of this header (pimpl), so consumers of
+// the installed library need neither its headers nor its link line.
 //
-// Queries are const and may run from several threads at once: each thread takes its own NavQuery (Detour's
-// dtNavMeshQuery keeps per-query node pools, which is why a query object is not shared).
+// A NavMesh is immutable once built and may be shared by any number of threads; queries run from several
+// threads at once when each thread takes its own NavQuery (Detour's dtNavMeshQuery keeps per-query node pools,
+// which is why a query object is not shared).
 #include <cstdint>
 #include <memory>
 #include <optional>
