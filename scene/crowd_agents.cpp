@@ -125,6 +125,9 @@ void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& s
   for (const ScenarioPolygon& p : scenario.obstacles) polygons.push_back(p.points);
   agents->obstacles = std::make_unique<ObstacleSet>(polygons);
   agents->move.turn_rate = m.style.turn_rate;
+  agents->move.turn_in_place_rate = m.style.turn_in_place_rate;
+  agents->move.acceleration = m.style.agent_acceleration;
+  agents->move.braking = m.style.agent_braking;
   m.source = MotionSource::Walk;
   const CrowdAgents& a = *agents;
   crowd.agents = std::move(agents);

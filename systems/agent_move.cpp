@@ -23,26 +23,23 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
   const float desired_speed = std::hypot(desired_x, desired_z);
   float heading = a.at(kAgentHeading, i);
   float speed = std::hypot(a.at(kAgentVx, i), a.at(kAgentVz, i));
-  float dir_x = speed > 1e-6f ? a.at(kAgentVx, i) / speed : std::sin(heading);
-  float dir_z = speed > 1e-6f ? a.at(kAgentVz, i) / speed : std::cos(heading);
   float target_speed = 0.0f;
   if (job.gait.at(kGaitIdle, i) > 0.0f) {
     // Leaving (or settling into) the idle stance: the feet are down side by side and the body waits for them.
     speed = 0.0f;
   } else if (desired_speed > 1e-4f) {
-    dir_x = desired_x / desired_speed;
-    dir_z = desired_z / desired_speed;
-    const float turn = wrap_angle(std::atan2(dir_x, dir_z) - heading);
-    const float most = p.turn_rate * dt;
-    heading = wrap_angle(heading + std::clamp(turn, -most, most));
+    const float want = std::atan2(desired_x, desired_z);
+    const float most = turn_rate_at(speed, p.turn_rate, p.turn_in_place_rate) * dt;
+    heading = wrap_angle(heading + std::clamp(wrap_angle(want - heading), -most, most));
     // Facing away from where it should go, it slows (to a stop past 90 degrees) while it turns.
-    const float left = wrap_angle(std::atan2(dir_x, dir_z) - heading);
-    target_speed = desired_speed * std::max(std::cos(left), 0.0f);
+    target_speed = desired_speed * std::max(std::cos(wrap_angle(want - heading)), 0.0f);
   }
   const float change = target_speed - speed;
   speed += std::clamp(change, -p.braking * dt, p.acceleration * dt);
   speed = std::max(speed, 0.0f);
-  const float vx = dir_x * speed, vz = dir_z * speed;
+  // The body walks where it faces. Rejected: moving along avoidance's direction with the body turning after it,
+  // which crabbed sideways at walking speed (the legs crossed and IK missed its goals by decimetres).
+  const float vx = std::sin(heading) * speed, vz = std::cos(heading) * speed;
   a.at(kAgentVx, i) = vx;
   a.at(kAgentVz, i) = vz;
   a.at(kAgentPx, i) += vx * dt;
@@ -86,7 +83,7 @@ bool AgentMoveJob::validate() const {
       !state.fits(n, kAgentInts))
     return false;
   if (agent.overlaps(corners) || agent.overlaps(gait) || agent.overlaps(state)) return false;
-  if (!std::isfinite(dt) || dt < 0.0f || !(params.turn_rate > 0.0f) || !(params.acceleration > 0.0f) ||
+  if (!std::isfinite(dt) || dt < 0.0f || !(params.turn_rate > 0.0f) || !(params.turn_in_place_rate > 0.0f) || !(params.acceleration > 0.0f) ||
       !(params.braking > 0.0f) || !(params.progress_step > 0.0f))
     return false;
   // A non-finite avoidance velocity would move the agent to NaN: refuse it rather than propagate.

@@ -13,6 +13,7 @@
 
 #include "components/walker.h"
 #include "motion/gait.h"
+#include "systems/agent_move.h"
 
 namespace strata {
 namespace {
@@ -66,20 +67,38 @@ struct GroundTrack {
   const CardinalSpline* path = nullptr;  // path mode when set
   float distance = 0.0f;                 // path distance (path mode) or odometer (agents), now
   float speed = 0.0f;                    // m/s: the gait's along a path, the agent's |velocity|
-  glm::vec2 position{0.0f}, velocity{0.0f};  // agents: ground (x, z)
-  float heading = 0.0f, turn_rate = 0.0f;     // agents: facing now, and how fast it turns towards its velocity
+  glm::vec2 position{0.0f};  // agents: ground (x, z); the body moves along its heading (systems/agent_move.h)
+  float heading = 0.0f;      // agents: facing and direction of travel now
+  float turn = 0.0f;         // agents: how far it still turns towards the velocity avoidance wants (rad, signed)
+  float turn_rate = 0.0f;    // agents: rad/s
+  float stop_distance = -1.0f;  // agents: metres it has left to brake to a stop; < 0 when it is not stopping
   float speed_ratio = 1.0f;  // agents: |velocity| over the gait's speed at its cadence, in [0, 1]
 
   // The pelvis `ahead` seconds from now (negative: in the past), `extra` metres further along its way.
+  // Agents: at today's speed, turning at turn_rate until it faces where avoidance sends it (an arc, then a straight
+  // line), and no further than its braking distance when it is stopping. A straight-line prediction put the
+  // footprints of a 90-degree turn ~0.3 m outside the body's arc, and the legs could not reach them.
   Pose2 at(float ahead, float extra = 0.0f) const {
     if (path) return path_pose(*path, distance + speed * ahead + extra);
-    float h = heading;
-    if (speed > 0.05f) {
-      const float turn = wrap_angle(std::atan2(velocity.x, velocity.y) - heading);
-      const float most = turn_rate * std::abs(ahead);
-      h += std::clamp(turn, -most, most);
+    if (ahead <= 0.0f) {
+      const glm::vec2 p = position + (speed * ahead + extra) * glm::vec2(std::sin(heading), std::cos(heading));
+      return {{p.x, 0.0f, p.y}, heading};
     }
-    const glm::vec2 p = position + velocity * ahead + extra * glm::vec2(std::sin(h), std::cos(h));
+    float travel = speed * ahead;
+    if (stop_distance >= 0.0f) travel = std::min(travel, stop_distance);
+    glm::vec2 p = position;
+    float h = heading;
+    const float turn_time = turn_rate > 0.0f ? std::abs(turn) / turn_rate : 0.0f;
+    const float arc = std::min(travel, speed * turn_time);
+    if (arc > 1e-5f && std::abs(turn) > 1e-4f) {
+      // Heading h0 + w t over the arc, w = +-turn_rate; dir(h) = (sin h, cos h) integrated in closed form.
+      const float w = turn > 0.0f ? turn_rate : -turn_rate;
+      const float t = arc / speed;
+      const float h1 = h + w * t;
+      p += (speed / w) * glm::vec2(std::cos(h) - std::cos(h1), std::sin(h1) - std::sin(h));
+      h = h1;
+    }
+    p += (travel - arc + extra) * glm::vec2(std::sin(h), std::cos(h));
     return {{p.x, 0.0f, p.y}, h};
   }
   float distance_at(float ahead, float extra = 0.0f) const { return distance + speed * ahead + extra; }
@@ -88,6 +107,16 @@ struct GroundTrack {
 // The flat footprint of leg `leg` under a pelvis at `p`: the rest ankle carried along.
 Pose2 footprint(const LocomotionRig& rig, const Pose2& p, int leg, float scale) {
   return {p.position + yaw(p.heading) * (rig.ankle_rest[leg] * scale), p.heading};
+}
+
+// The footprint a swing lands on `strike_in` seconds from now. A turning agent's foot points where the body will
+// face half-way through that stance, so the body turns over it from one side to the other (+-35 degrees at
+// walking pace) rather than all one way (up to 80, past what hip, knee and ankle twist).
+Pose2 landing_footprint(const LocomotionRig& rig, const GroundTrack& track, float strike_in, float lead, int leg,
+                        float scale, float stance_time) {
+  Pose2 p = track.at(strike_in, lead);
+  if (!track.path) p.heading = track.at(strike_in + 0.5f * stance_time, lead).heading;
+  return footprint(rig, p, leg, scale);
 }
 
 struct AnklePose {
@@ -293,10 +322,13 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
     // standing (kGaitIdle > 0) holds its phase.
     const ColumnView<const float>& a = source.agent;
     track.position = {a.at(kAgentPx, i), a.at(kAgentPz, i)};
-    track.velocity = {a.at(kAgentVx, i), a.at(kAgentVz, i)};
     track.heading = a.at(kAgentHeading, i);
-    track.turn_rate = style.turn_rate;
-    track.speed = glm::length(track.velocity);
+    track.speed = std::hypot(a.at(kAgentVx, i), a.at(kAgentVz, i));
+    track.turn_rate = turn_rate_at(track.speed, style.turn_rate, style.turn_in_place_rate);
+    const float wish_x = a.at(kAgentOrcaVx, i), wish_z = a.at(kAgentOrcaVz, i);
+    if (std::hypot(wish_x, wish_z) > 1e-3f) track.turn = wrap_angle(std::atan2(wish_x, wish_z) - track.heading);
+    if (std::hypot(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)) < style.stand_speed)
+      track.stop_distance = track.speed * track.speed / (2.0f * style.agent_braking);
     g[kGaitCadenceTarget] = g[kGaitCadence] = agent_cadence(track.speed, g[kGaitHeight], style);
     const GaitParameters gp = current_gait(g);
     if (g[kGaitIdle] <= 0.0f) g[kGaitPhase] = frac(g[kGaitPhase] + dt / gp.cycle_time);
@@ -344,9 +376,20 @@ bool agent_wants_to_stand(const ColumnView<const float>& agent, std::size_t i, c
 }
 
 void walk_one(const LocomotionRig& rig, const TrackSource& source, const LocomotionColumns& lanes, std::size_t i,
-              float dt, const GaitStyle& style) {
+              float dt, const GaitStyle& base_style) {
   GaitRef g{lanes.gait.base, lanes.gait.stride, i};
-  const GaitClock clock = advance_gait_clock(rig, source, g, lanes.time.at(0, i), lanes.placement, i, dt, style);
+  const GaitClock clock = advance_gait_clock(rig, source, g, lanes.time.at(0, i), lanes.placement, i, dt, base_style);
+  // An agent stepping slower than its cadence's speed rolls off its toes less: a full 63-degree toe-off under a
+  // body that hardly moves forward asks the ankle for more plantarflexion than it has, and IK's clamp then pivots
+  // the foot on the ground (measured: 5 cm of toe-tip slide while stopping).
+  GaitStyle agent_style;
+  const GaitStyle* chosen = &base_style;
+  if (source.agents() && clock.track.speed_ratio < 1.0f) {
+    agent_style = base_style;
+    agent_style.toe_off_pitch *= std::max(clock.track.speed_ratio, 0.3f);
+    chosen = &agent_style;
+  }
+  const GaitStyle& style = *chosen;
   const GaitParameters& gp = clock.gp;
   const GroundTrack& track = clock.track;
   const float phase = g[kGaitPhase];
@@ -372,9 +415,21 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), 1.0f, scale, style, &p);
       const float strike_in = (1.0f - psi) * gp.cycle_time;
-      const Pose2 to = footprint(rig, track.at(strike_in, lead), leg, scale);
+      const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
       begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
                   track.distance_at(strike_in, lead));
+    } else if (swinging && source.agents() && psi < sf + style.retarget_until * (1.0f - sf)) {
+      // Agents: the swing foot re-aims at each frame's prediction through most of its swing, as a person adjusts a
+      // step in flight. A target fixed at toe-off landed a turning walker's foot where the body would have been had
+      // it gone straight, up to 1.4 m off its path by the end of that stance. The lane walk's predictions do not
+      // change in flight, so it keeps the toe-off target (and its measured gait).
+      const float strike_in = (1.0f - psi) * gp.cycle_time;
+      const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
+      g.leg(leg, kLegToX) = to.position.x;
+      g.leg(leg, kLegToY) = to.position.y;
+      g.leg(leg, kLegToZ) = to.position.z;
+      g.leg(leg, kLegToHeading) = to.heading;
+      g.leg(leg, kLegToDistance) = track.distance_at(strike_in, lead);
     }
   }
   // Agents: standing. A walker that wants to stand goes on stepping (its last steps land beside the other foot,
@@ -402,6 +457,36 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   // the pitch scaled by the square of the step; longer ones keep the full pitch (scaling it up too pushed the
   // ankle to 10 deg at 1.8 m/s). Cadence eases slowly, so the pitch of a rolling heel changes smoothly and its
   // pivot stays put.
+  // Agents: a stance foot the body has turned too far over pivots on the contact that carries it (the heel in
+  // the heel rocker, the toe tip in the toe rocker), as a person pivots on the forefoot in a sharp turn. The contact stays where it is; the footprint kept is turned about it, so the next frames go on from
+  // there. Without it the hip, knee and ankle ran out of twist and IK's clamp dragged the toe tip 15 mm sideways.
+  // In between it never pivots: the turn rates keep its twist within bounds there, its footprint pointing where the
+  // body faces at mid-stance.
+  if (source.agents()) {
+    for (int leg = 0; leg < 2; ++leg) {
+      if (g.leg(leg, kLegSwinging) > 0.5f) continue;
+      const float tau = std::min(frac(phase - 0.5f * static_cast<float>(leg)) / sf, 1.0f);
+      // The foot may pivot only while one point carries it: the heel before foot flat, the toe tip once the toes
+      // bend no further. Flat, or rolling over the ball with the toes down, it holds (both ball and tip would move).
+      const float roll = tau >= style.heel_off
+                             ? style.toe_off_pitch * smoothstep01((tau - style.heel_off) / (1.0f - style.heel_off))
+                             : 0.0f;
+      const bool on_heel = tau < style.heel_rocker, on_tip = roll > rig.toe_limit;
+      const float heading = g.leg(leg, kLegPlantHeading);
+      const float twist = wrap_angle(heading - pelvis.heading);
+      if ((!on_heel && !on_tip) || std::abs(twist) <= style.max_foot_twist) continue;
+      const glm::vec3 contact_rest = on_tip ? rig.tip_rest[leg] : rig.heel_rest[leg];
+      const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
+      const glm::vec3 offset = (contact_rest - rig.ankle_rest[leg]) * scale;
+      const glm::vec3 contact = plant + yaw(heading) * offset;
+      const float turned = pelvis.heading + std::clamp(twist, -style.max_foot_twist, style.max_foot_twist);
+      const glm::vec3 moved = contact - yaw(turned) * offset;
+      g.leg(leg, kLegPlantX) = moved.x;
+      g.leg(leg, kLegPlantY) = moved.y;
+      g.leg(leg, kLegPlantZ) = moved.z;
+      g.leg(leg, kLegPlantHeading) = turned;
+    }
+  }
   const float step_ratio = std::clamp(gp.step_length * track.speed_ratio / (0.7f * scale), 0.5f, 1.0f);
   const float strike_pitch = style.heel_strike_pitch * step_ratio * step_ratio;
   // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
@@ -444,7 +529,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, lp.plant, lp.plant_heading, 1.0f, scale, style, &p);
       const float strike_in = (std::max(sf - lp.psi, 0.0f) + 1.0f - sf) * gp.cycle_time;
-      const Pose2 to = footprint(rig, track.at(strike_in, lead), leg, scale);
+      const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
       lp.swing = make_swing(leg, from.position, lp.plant_heading, p, to.position, to.heading);
     }
   }
@@ -466,15 +551,16 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   };
   for (int leg = 0; leg < 2; ++leg) ankle[leg] = ankle_at(leg, 0.0f, &toe_pitch[leg]);
   if (settle > 0.0f) {
-    // Standing: each foot eases from its pose at the held phase to flat on its footprint (a trailing heel comes
-    // down, a landing forefoot rolls down), so the stance has both soles on the ground.
+    // Standing: each foot rolls from its place in stance at the held phase to flat on its footprint (a trailing
+    // heel comes down about the ball, a landing forefoot rolls down about the heel), so the stance has both soles
+    // on the ground. Moving along the stance's own rockers keeps the contact that carries the foot still;
+    // blending the two ankle poses instead slid the ball and toe tip by up to 9 cm.
     const float flat_tau = 0.5f * (style.heel_rocker + style.heel_off);
     for (int leg = 0; leg < 2; ++leg) {
-      const AnklePose flat = stance_pose(rig, leg, legs[leg].plant, legs[leg].plant_heading, flat_tau, scale, style,
-                                         nullptr, strike_pitch);
-      ankle[leg].position = glm::mix(ankle[leg].position, flat.position, settle);
-      ankle[leg].orientation = glm::slerp(ankle[leg].orientation, flat.orientation, settle);
-      toe_pitch[leg] *= 1.0f - settle;
+      if (legs[leg].swinging) continue;  // never while standing: it starts with both feet down
+      const float tau = std::min(legs[leg].psi / sf, 1.0f);
+      ankle[leg] = stance_pose(rig, leg, legs[leg].plant, legs[leg].plant_heading, glm::mix(tau, flat_tau, settle),
+                               scale, style, &toe_pitch[leg], strike_pitch);
     }
   }
 
@@ -747,7 +833,7 @@ bool StartWalkingJob::run() const {
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, plant.position, plant.heading, 1.0f, scale, style, &p);
       const float strike_in = (1.0f - psi) * gp.cycle_time;
-      const Pose2 to = footprint(rig, track.at(strike_in, lead), leg, scale);
+      const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
       begin_swing(g, leg, from.position, plant.heading, p, to.position, to.heading, track.distance_at(strike_in, lead));
     }
   }

@@ -94,9 +94,22 @@ struct GaitStyle {
   float speed_period = 18.0f;        // seconds per cycle of the speed schedule
 
   // ---- Walkers following steered agents (scenario crowds) ----
-  // How fast the body turns towards its velocity (rad/s). ~90 deg/s: a person turning on the spot takes two or
-  // three steps for a half turn; agent_move turns the agent at this rate and the walk predicts footprints with it.
-  float turn_rate = 1.6f;
+  // How fast the body turns while walking (rad/s; it walks where it faces), ~80 deg/s: a stance lasts ~0.7 s and
+  // the body turns over a planted foot by at most ~0.5 rad either side of its footprint's heading (2.0 needed
+  // 0.7, past what hip, knee and ankle twist). agent_move turns the agent at this rate and the walk predicts
+  // footprints with it.
+  float turn_rate = 1.4f;
+  float turn_in_place_rate = 1.0f;  // rad/s standing; between the two by speed (systems/agent_move.h turn_rate_at)
+  // Braking of a stopping agent (m/s^2; agent_move brakes at it, the walk predicts its last footprints with it):
+  // ~1.5 stops a walker at 1.3 m/s in about two steps, as people stop. Speeding up: agent_acceleration.
+  float agent_braking = 1.5f;
+  // Gait initiation reaches walking speed in about three steps; 1.2 lengthened the second step past what the
+  // trailing leg reaches (IK missed by 4 cm for a tenth of a second).
+  float agent_acceleration = 0.8f;
+  // Agents: the most a stance foot's heading may differ from the body's before it pivots on its contact (rad).
+  float max_foot_twist = 0.5f;
+  // Agents: a swinging foot re-aims at the newest footprint prediction until this fraction of its swing.
+  float retarget_until = 0.8f;
   // Lowest cadence of a walking agent (steps/min): at a crawl the gait formula's cadence falls to 40, slow motion;
   // people easing to a stop or turning on the spot take short steps at a near-normal rate.
   float agent_min_cadence = 80.0f;
