@@ -544,7 +544,8 @@ ObstacleSet::ObstacleSet(const std::vector<std::vector<glm::vec2>>& polygons, fl
     const vec2 c = 0.5f * (e.a + e.b);
     const vec2 half = 0.5f * glm::abs(e.b - e.a);
     // cell_span takes a square: use the larger half-extent (conservative).
-    if (!cell_span(c, std::max(half.x, half.y), x0, x1, z0, z1)) return;
+    // (padded by a thousandth of a cell, so rounding cannot drop an edge from a cell its end only touches)
+    if (!cell_span(c, std::max(half.x, half.y) + 1e-3f * cell_, x0, x1, z0, z1)) return;
     for (std::uint32_t z = z0; z <= z1; ++z)
       for (std::uint32_t x = x0; x <= x1; ++x) f(static_cast<std::size_t>(z) * cols_ + x);
   };

@@ -258,6 +258,60 @@ TEST(Avoidance, AgentsPassInANarrowCorridor) {
   EXPECT_TRUE(c.all_finite());
 }
 
+// Two agents hugging a wall meet head-on (the complaint "stuck between a wall and another agent"): both pass,
+// neither enters the wall, no overlap.
+TEST(Avoidance, HeadOnAlongAWallNobodyStuck) {
+  const ObstacleSet obstacles({box({-10.0f, -1.0f}, {10.0f, 0.0f})}, 2.0f);
+  Crowd c;
+  c.add({-6.0f, 0.32f}, {6.0f, 0.32f});
+  c.add({6.0f, 0.32f}, {-6.0f, 0.32f});
+  AvoidanceScratch scratch;
+  int worst = 0, steps = 0;
+  float clearance = std::numeric_limits<float>::max();
+  for (; steps < 30 * 30 && !c.all_arrived(0.1f); ++steps) {
+    ASSERT_TRUE(c.step(scratch, &obstacles, kDt));
+    worst = std::max(worst, c.overlaps());
+    for (std::size_t i = 0; i < c.size(); ++i) clearance = std::min(clearance, c.pz[i] - c.radius[i]);
+  }
+  EXPECT_TRUE(c.all_arrived(0.1f)) << "after " << steps << " steps";
+  EXPECT_EQ(worst, 0);
+  EXPECT_GE(clearance, -0.01f);
+}
+
+// A room 8 x 8 m emptying through one 1.4 m door in its east wall: 24 agents, each aiming at the doorway first
+// (the caller's navigation would), then at a goal outside. All leave and reach their goals, never overlapping,
+// never inside a wall.
+TEST(Avoidance, RoomEmptiesThroughOneDoor) {
+  // Walls 0.5 m thick around [0, 8] x [0, 8]; the east wall has a door between z = 3.3 and 4.7.
+  const std::vector<std::vector<vec2>> walls = {
+      box({-0.5f, -0.5f}, {8.5f, 0.0f}), box({-0.5f, 8.0f}, {8.5f, 8.5f}), box({-0.5f, 0.0f}, {0.0f, 8.0f}),
+      box({8.0f, 0.0f}, {8.5f, 3.3f}), box({8.0f, 4.7f}, {8.5f, 8.0f})};
+  const ObstacleSet obstacles(walls, 2.0f);
+  Crowd c;
+  for (int k = 0; k < 24; ++k) {
+    const vec2 p(1.0f + 1.2f * static_cast<float>(k % 6), 1.5f + 1.5f * static_cast<float>(k / 6));
+    c.add(p, {12.0f + 0.8f * static_cast<float>(k % 4), 1.0f + 1.5f * static_cast<float>(k / 4)});
+  }
+  const std::vector<vec2> final_goal = c.goal;
+  AvoidanceScratch scratch;
+  int worst = 0, steps = 0;
+  float wall_clearance = std::numeric_limits<float>::max();
+  for (; steps < 30 * 90 && !c.all_arrived(0.2f); ++steps) {
+    for (std::size_t i = 0; i < c.size(); ++i)  // through the doorway: aim at it until past the wall
+      c.goal[i] = c.px[i] < 8.6f ? vec2(9.0f, 4.0f) : final_goal[i];
+    ASSERT_TRUE(c.step(scratch, &obstacles, kDt));
+    worst = std::max(worst, c.overlaps());
+    for (std::size_t i = 0; i < c.size(); ++i)
+      for (const auto& w : walls)
+        wall_clearance = std::min(wall_clearance, box_distance(c.position(i), w[0], w[2]) - c.radius[i]);
+  }
+  EXPECT_TRUE(c.all_arrived(0.2f)) << "after " << steps << " steps";
+  EXPECT_EQ(worst, 0);
+  EXPECT_GE(wall_clearance, -0.01f);
+  EXPECT_TRUE(c.all_finite());
+  RecordProperty("steps", steps);
+}
+
 Crowd random_crowd(std::size_t n, float side, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> pos(-side / 2, side / 2), vel(-1.5f, 1.5f), rad(0.2f, 0.4f);
