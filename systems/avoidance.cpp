@@ -412,8 +412,12 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   }
   // Belt and braces: the LPs keep |result| <= max_speed up to rounding; never hand out a NaN or an overshoot.
   if (!(std::isfinite(result.x) && std::isfinite(result.y))) return vec2(0.0f);
-  const float l2 = length_squared(result);
-  if (l2 > max_speed * max_speed) result *= max_speed / std::sqrt(l2);
+  // In double: a float square of a 1e-29 m/s rounding residue underflows to 0 and would slip past max_speed 0.
+  const double l2 = static_cast<double>(result.x) * result.x + static_cast<double>(result.y) * result.y;
+  if (l2 > static_cast<double>(max_speed) * max_speed) {
+    const double scale = static_cast<double>(max_speed) / std::sqrt(l2);
+    result = vec2(static_cast<float>(result.x * scale), static_cast<float>(result.y * scale));
+  }
   return result;
 }
 
