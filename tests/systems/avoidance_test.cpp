@@ -179,11 +179,11 @@ CircleRun run_circle(int n, float ring, int step_limit) {
 
 // 128 agents (radius 0.3 m) on a 14 m circle, each to the opposite point: all arrive within 150 s (28 m at
 // 1.4 m/s is 20 s unhindered; the centre jam is chaotic: runs differing only by 0.1 m in the ring or in the max
-// speed's last bit took
-// 45 to 95 s, the last agents walking straight to their goals, not stuck), never a NaN. Overlap: where the whole ring meets in the centre every agent's
-// half-planes leave nothing (ORCA's infeasible case) and the least-violation fallback lets pairs press a few
-// centimetres into each other for about two seconds; this holds that depth under 12 % of the radii sum (7 cm here;
-// measured 10 %), pending the zero-overlap target below.
+// speed's last bit took 45 to 95 s, the last agents walking straight to their goals, not stuck), never a NaN.
+// Overlap: where the whole ring meets in the centre every agent's half-planes leave nothing (ORCA's infeasible
+// case) and the least-violation fallback lets pairs press a few centimetres into each other for about two
+// seconds; this holds that depth under 12 % of the radii sum (7 cm here; measured 10 %), pending the zero-overlap
+// target below.
 TEST(Avoidance, CircleToAntipodesAllArriveOverlapBounded) {
   const CircleRun run = run_circle(128, 14.0f, 30 * 150);
   ASSERT_TRUE(run.finite);
