@@ -317,8 +317,9 @@ HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j)
 // Collects agent i's obstacle half-planes into planes[0..); returns how many. Edges within reach (obstacle
 // horizon times max speed, plus the radius) are taken nearest first. For an agent outside every polygon, each
 // edge facing it gives the half-plane of the truncated velocity obstacle of that edge (the segment grown by the
-// radius, seen over obstacle_time_horizon) tangent at its point nearest the zero velocity, which the paper uses
-// for obstacles: dot(v, toward) <= (gap) / horizon, `toward` pointing at the edge's nearest point. Edges facing
+// radius, seen over obstacle_time_horizon) tangent at its point nearest the zero velocity (the paper's choice of
+// optimisation velocity for static obstacles, so standing still is always allowed):
+// dot(v, toward) <= gap / horizon, `toward` pointing at the edge's nearest point. Edges facing
 // away are skipped: reaching one means crossing a facing edge first (or, at a corner, the facing edge that shares
 // the corner), whose half-plane already forbids it. Rejected: RVO2-style legs from each vertex, which let agents
 // graze corners more tightly but need the neighbouring edges' geometry to stay consistent; the nearest-point

@@ -219,6 +219,25 @@ TEST(Avoidance, WalksAroundABoxWithoutEnteringIt) {
   }
 }
 
+// Straight at the middle of a box, goal right behind it: ORCA is local, and with the preferred velocity exactly
+// along the face's normal there is no side to slide to, so the agent stops at the face (routing round is the
+// navigation's job). What this holds: it stops outside, without a NaN, and does not jitter.
+TEST(Avoidance, HeadOnIntoABoxStopsOutsideIt) {
+  const vec2 lo(-1.0f, -1.0f), hi(1.0f, 1.0f);
+  const ObstacleSet obstacles({box(lo, hi)}, 1.0f);
+  Crowd c;
+  c.add({-4.0f, 0.0f}, {4.0f, 0.0f});
+  AvoidanceScratch scratch;
+  float closest = std::numeric_limits<float>::max();
+  for (int steps = 0; steps < 30 * 10; ++steps) {
+    ASSERT_TRUE(c.step(scratch, &obstacles, kDt));
+    ASSERT_TRUE(c.all_finite());
+    closest = std::min(closest, box_distance(c.position(0), lo, hi));
+  }
+  EXPECT_GE(closest, c.radius[0] - 0.01f);
+  EXPECT_LT(std::hypot(c.vx[0], c.vz[0]), 0.05f);  // come to rest, not oscillating against the face
+}
+
 TEST(Avoidance, CornersAndWallWithCollinearPoints) {
   // A wall along z = 0 from x = -3 to 3, one metre thick, given clockwise and with collinear points on its face:
   // the agent below it walks to a goal above it around its end.
