@@ -10,7 +10,6 @@
 //   reads:  position (x, z), velocity, preferred velocity, radius, max speed, the obstacle edges
 //   writes: new velocity (x, z)
 // Written from the paper; RVO2's source was not used.
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
