@@ -2,10 +2,16 @@
 // Local avoidance: ORCA, optimal reciprocal collision avoidance (van den Berg, Guy, Lin, Manocha, "Reciprocal
 // n-body collision avoidance", ISRR 2011), over SoA agent columns. Each agent takes one half-plane of permitted
 // velocities per neighbour (each side taking half the responsibility for avoiding the other) and one per nearby
-// static obstacle edge, and picks the permitted velocity nearest its preferred one: a 2-D linear program, with the
-// 3-D fallback that minimises the largest violation when the half-planes leave nothing. Neighbours come from a
-// uniform spatial grid rebuilt each step. Agents are independent given the last step's positions and velocities,
-// so the job runs in oneTBB chunks and gives the same bits for any thread count.
+// static obstacle edge, and picks the permitted velocity nearest its preferred one: a 2-D linear program. When the
+// half-planes leave nothing (dense jams), the paper's 3-D fallback: obstacle half-planes stay hard, and the largest
+// violation of the others is minimised, each weighted by 1 / gap to that neighbour; among the velocities achieving
+// that minimum, the one nearest the preferred. Neighbours come from a uniform spatial grid rebuilt each step.
+// Agents are independent given the last step's positions and velocities, so the job runs in oneTBB chunks and
+// gives the same bits for any thread count.
+//
+// Known limits (tests/systems/avoidance_test.cpp): in that fallback pairs can press a few centimetres into each
+// other (a 128-agent antipodal circle: 6 cm at 0.6 m radii sum, ~2 s of the run); an agent sent straight at the
+// middle of an obstacle's face stops there (a local method has no side to prefer; routing is navigation's job).
 //
 //   reads:  position (x, z), velocity, preferred velocity, radius, max speed, the obstacle edges
 //   writes: new velocity (x, z)
