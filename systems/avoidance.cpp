@@ -2,12 +2,17 @@
 
 // Measured (bench/avoidance_bench.cpp, Release, GCC 12, a jittered grid of ~1 agent per 2 m^2 walking to random
 // goals, 6 box obstacles, default parameters: 12 neighbours within 4 m, horizons 2 s / 0.6 s) on the 2-core AMD
-// EPYC development machine (nproc 2) while another engineer's build shared it; best of several runs:
-//   10,000 agents: 5.25 ms per step on 2 threads (issue 16's target: 5 ms), 9.3 ms on one;
-//    1,000 agents: 0.89 ms on 2 threads, 0.92 ms on one.
-// Under load the same runs read 5.5-7 ms of CPU time per step on 2 threads. About 70 % of an agent's ~1 us goes to
-// the neighbour search (perf), the rest to building the half-planes and the linear program.
-//
+// EPYC development machine (nproc 2), which another engineer's build kept at a load of 3 to 4 throughout; best of
+// repeated runs:
+//   10,000 agents: one thread 9.0 ms per step (CPU and wall alike); two threads 9.1 ms wall, because the build
+//                  held the second core (the calling thread's own share was 4.9 ms of CPU). An earlier revision
+//                  (callgrind: 9 % more instructions, 40 % more mispredicted branches) measured 5.25 ms wall on
+//                  two threads in a quieter moment (load ~1.6), so on an idle machine the two-thread step should
+//                  sit at or just under issue 16's 5 ms; not verified.
+//    1,000 agents: one thread 0.89 ms, two threads 0.85 ms wall.
+// Where the time goes (perf, callgrind): about 70 % of an agent's ~0.9 us is the neighbour search, the rest the
+// half-planes and the linear program.
+
 // The half-plane form used throughout: a constraint is {v : dot(v - point, normal) >= 0} with |normal| = 1, the
 // permitted side being where the normal points. The paper and RVO2 describe a line by a point and a direction
 // with the permitted side on the left; a normal is the same information (direction = (normal.y, -normal.x)) and
