@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include "systems/avoidance.h"
@@ -378,11 +379,18 @@ TEST(Avoidance, SameBitsForAnyThreadCount) {
   const ObstacleSet obstacles = some_boxes();
   std::vector<std::vector<float>> results;
   for (const int threads : {1, 2, 8}) {
+    // global_control lifts the worker limit above this machine's 2 cores, so 8 means 8 threads here.
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     tbb::task_arena arena(threads);
     AvoidanceScratch scratch;
     AvoidanceJob job = c.job(scratch, &obstacles);
     bool ok = false;
-    arena.execute([&] { ok = job.run(); });
+    int concurrency = 0;
+    arena.execute([&] {
+      concurrency = tbb::this_task_arena::max_concurrency();
+      ok = job.run();
+    });
+    EXPECT_EQ(concurrency, threads);
     ASSERT_TRUE(ok);
     std::vector<float> r = c.new_vx;
     r.insert(r.end(), c.new_vz.begin(), c.new_vz.end());
