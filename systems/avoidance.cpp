@@ -2,14 +2,11 @@
 
 // Measured (bench/avoidance_bench.cpp, Release, GCC 12, a jittered grid of ~1 agent per 2 m^2 walking to random
 // goals, 6 box obstacles, default parameters: 12 neighbours within 4 m, horizons 2 s / 0.6 s) on the 2-core AMD
-// EPYC development machine (nproc 2), which another engineer's build kept at a load of 3 to 4 throughout; best of
-// repeated runs:
-//   10,000 agents: one thread 9.0 ms per step (CPU and wall alike); two threads 9.1 ms wall, because the build
-//                  held the second core (the calling thread's own share was 4.9 ms of CPU). An earlier revision
-//                  (callgrind: 9 % more instructions, 40 % more mispredicted branches) measured 5.25 ms wall on
-//                  two threads in a quieter moment (load ~1.6), so on an idle machine the two-thread step should
-//                  sit at or just under issue 16's 5 ms; not verified.
-//    1,000 agents: one thread 0.89 ms, two threads 0.85 ms wall.
+// EPYC development machine (nproc 2), which another engineer's build kept at a load of 2.6 to 4.7 throughout;
+// best of repeated runs (wall time per step):
+//   10,000 agents: two threads 5.45 ms (issue 16's target is 5 ms: not met on the loaded machine; most runs read
+//                  9-12 ms, the build holding the second core), one thread 9.3 ms.
+//    1,000 agents: two threads 0.39 ms (most runs 0.85-0.9 ms), one thread 0.91 ms.
 // Where the time goes (perf, callgrind): about 70 % of an agent's ~0.9 us is the neighbour search, the rest the
 // half-planes and the linear program.
 
