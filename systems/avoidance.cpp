@@ -2,11 +2,11 @@
 
 // Measured (bench/avoidance_bench.cpp, Release, GCC 12, a jittered grid of ~1 agent per 2 m^2 walking to random
 // goals, 6 box obstacles, default parameters: 12 neighbours within 4 m, horizons 2 s / 0.6 s) on the 2-core AMD
-// EPYC development machine (nproc 2), which another engineer's build kept at a load of 2.6 to 4.7 throughout;
-// best of repeated runs (wall time per step):
-//   10,000 agents: two threads 5.45 ms (issue 16's target is 5 ms: not met on the loaded machine; most runs read
-//                  9-12 ms, the build holding the second core), one thread 9.3 ms.
-//    1,000 agents: two threads 0.39 ms (most runs 0.85-0.9 ms), one thread 0.91 ms.
+// EPYC development machine (nproc 2), which another engineer's build kept at a load of 2 to 4.7 throughout; best
+// of repeated runs (wall time per step), taken in the quietest minute (load 2.05):
+//   10,000 agents, two threads: 5.33 ms with the second pass (the default), 4.83 ms without it (issue 16's target
+//                  is 5 ms); most runs under load read 9-12 ms, the build holding the second core.
+//   10,000 agents, one thread: 9.6 ms.      1,000 agents: two threads 0.44 ms, one thread 0.96 ms.
 // Where the time goes (perf, callgrind): about 70 % of an agent's ~0.9 us is the neighbour search, the rest the
 // half-planes and the linear program.
 
