@@ -1,6 +1,7 @@
 // Google Benchmark: one ORCA avoidance step (systems/avoidance.h) over a dense random crowd, about one agent per
 // 2 m^2, with six box obstacles (4 x 3 m) and preferred velocities towards random goals. Reports ms per step (the time
-// unit) and agents per second. The *Serial variant pins oneTBB to one thread; the other uses every core.
+// unit) and agents per second. The *Serial variant pins oneTBB to one thread; the others use every core;
+// *OnePass turns AvoidanceParameters::second_pass off.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -54,7 +55,7 @@ Columns make_crowd(std::size_t n, const std::vector<std::vector<glm::vec2>>& box
   return c;
 }
 
-void run_bench(benchmark::State& state, bool serial) {
+void run_bench(benchmark::State& state, bool serial, bool second_pass = true) {
   std::unique_ptr<tbb::global_control> one;
   if (serial) one = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
   const auto n = static_cast<std::size_t>(state.range(0));
@@ -80,6 +81,7 @@ void run_bench(benchmark::State& state, bool serial) {
   job.new_vz = c.new_vz;
   job.obstacles = &obstacles;
   job.scratch = &scratch;
+  job.params.second_pass = second_pass;
   for (auto _ : state) {
     if (!job.run()) state.SkipWithError("invalid AvoidanceJob");
     benchmark::ClobberMemory();
@@ -89,7 +91,9 @@ void run_bench(benchmark::State& state, bool serial) {
 
 void BM_Avoidance(benchmark::State& state) { run_bench(state, false); }
 void BM_AvoidanceSerial(benchmark::State& state) { run_bench(state, true); }
+void BM_AvoidanceOnePass(benchmark::State& state) { run_bench(state, false, false); }
 BENCHMARK(BM_Avoidance)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_AvoidanceOnePass)->Arg(10000)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_AvoidanceSerial)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

@@ -1,9 +1,15 @@
 #include "systems/avoidance.h"
 
-// Measured (bench/avoidance_bench.cpp, Release, dense random crowd ~1 agent / 2 m^2, 6 box obstacles, defaults:
-// 12 neighbours within 4 m, horizons 2 s / 0.6 s): see BENCH_NUMBERS below, filled in from the run recorded in
-// the commit that added this file.
-//
+// Measured (bench/avoidance_bench.cpp, Release, GCC 12, a jittered grid of ~1 agent per 2 m^2 walking to random
+// goals, 6 box obstacles, default parameters: 12 neighbours within 4 m, horizons 2 s / 0.6 s) on the 2-core AMD
+// EPYC development machine (nproc 2), which another engineer's build kept at a load of 2 to 4.7 throughout; best
+// of repeated runs (wall time per step), taken in the quietest minute (load 2.05):
+//   10,000 agents, two threads: 5.33 ms with the second pass (the default), 4.83 ms without it (issue 16's target
+//                  is 5 ms); most runs under load read 9-12 ms, the build holding the second core.
+//   10,000 agents, one thread: 9.6 ms.      1,000 agents: two threads 0.44 ms, one thread 0.96 ms.
+// Where the time goes (perf, callgrind): about 70 % of an agent's ~0.9 us is the neighbour search, the rest the
+// half-planes and the linear program.
+
 // The half-plane form used throughout: a constraint is {v : dot(v - point, normal) >= 0} with |normal| = 1, the
 // permitted side being where the normal points. The paper and RVO2 describe a line by a point and a direction
 // with the permitted side on the left; a normal is the same information (direction = (normal.y, -normal.x)) and
@@ -11,6 +17,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -161,23 +168,42 @@ void solve_minimax(const HalfPlane* planes, std::size_t count, std::size_t hard,
 // The k nearest by (squared distance, index): a total order, so the kept set and its order (which the LP's
 // result depends on through rounding) are the same whatever order candidates arrive in: grid or brute force,
 // any chunking.
+//
+// The pair is packed into one 64-bit key, the distance's bits above the index: a non-negative float's bit pattern
+// orders like its value, so one integer comparison is the lexicographic one (comparing the float and then the
+// index compiles to a NaN-aware branch pair; callgrind: 2.5 % fewer instructions for the job, 2 % fewer
+// mispredicted branches). Squared distances here are never negative or NaN: validate() sees to that.
 struct Nearest {
-  float d2;
-  std::uint32_t index;
+  std::uint64_t key;
+  Nearest() = default;  // uninitialised: the lists are filled before they are read
+  Nearest(float squared_distance, std::uint32_t index)
+      : key(static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(squared_distance)) << 32 | index) {}
+  float d2() const { return std::bit_cast<float>(static_cast<std::uint32_t>(key >> 32)); }
+  std::uint32_t index() const { return static_cast<std::uint32_t>(key); }
 };
 
-bool closer(const Nearest& a, const Nearest& b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.index < b.index); }
+bool closer(const Nearest& a, const Nearest& b) { return a.key < b.key; }
 
-// Inserts into the sorted list items[0..count) of capacity `capacity`; an exact duplicate (the same edge seen from
-// two cells) is dropped.
-[[gnu::always_inline]] inline void keep_nearest(Nearest* items, std::uint32_t& count, std::uint32_t capacity, Nearest candidate) {
+// Inserts into the sorted list items[0..count) of capacity `capacity`, dropping the last when full. One loop that
+// finds the place and shifts as it goes (two loops, find then shift, mispredicted their exits twice as often).
+// Forced inline: it runs for every candidate of the neighbour search, and as a call it was a quarter of the job.
+[[gnu::always_inline]] inline void keep_nearest(Nearest* items, std::uint32_t& count, std::uint32_t capacity,
+                                                Nearest candidate) {
   if (count == capacity && !closer(candidate, items[count - 1])) return;
-  std::uint32_t at = count;
-  while (at > 0 && closer(candidate, items[at - 1])) --at;
-  if (at > 0 && items[at - 1].d2 == candidate.d2 && items[at - 1].index == candidate.index) return;
-  for (std::uint32_t k = count < capacity ? count : capacity - 1; k > at; --k) items[k] = items[k - 1];
-  items[at] = candidate;
+  std::uint32_t k = count < capacity ? count : capacity - 1;
+  while (k > 0 && closer(candidate, items[k - 1])) {
+    items[k] = items[k - 1];
+    --k;
+  }
+  items[k] = candidate;
   if (count < capacity) ++count;
+}
+
+// The same for obstacle edges, which arrive once per grid cell they cross: an exact duplicate is dropped.
+void keep_nearest_unique(Nearest* items, std::uint32_t& count, std::uint32_t capacity, Nearest candidate) {
+  for (std::uint32_t k = 0; k < count; ++k)
+    if (items[k].key == candidate.key) return;
+  keep_nearest(items, count, capacity, candidate);
 }
 
 // The closest point of an edge to p, exactly an endpoint when clamped, so the two edges meeting at a corner give
@@ -236,10 +262,22 @@ vec2 separation_direction(std::uint32_t self, std::uint32_t other) {
 
 // Agent i's half-plane against neighbour j (the paper's ORCA_{i|j}): u is the smallest change of the relative
 // velocity that leaves the truncated velocity obstacle, n its outward normal there; i takes half of u.
-HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j) {
+// The first pass's answers, for the second pass over the agents the first left without a permitted velocity.
+struct FirstPass {
+  const float* vx;
+  const float* vz;
+  const std::uint8_t* infeasible;
+};
+
+// `first` null: the ordinary ORCA half-plane from the current velocities, each side taking half. Otherwise (the
+// second pass): from both agents' first-pass velocities; a neighbour whose first pass succeeded keeps its answer,
+// so this agent takes the whole of the avoidance against it; one that failed too recomputes, so the half again.
+HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j, const FirstPass* first) {
   const AvoidanceParameters& prm = job.params;
   const vec2 pi(job.px[i], job.pz[i]), pj(job.px[j], job.pz[j]);
-  const vec2 vi(job.vx[i], job.vz[i]), vj(job.vx[j], job.vz[j]);
+  const vec2 vi = first ? vec2(first->vx[i], first->vz[i]) : vec2(job.vx[i], job.vz[i]);
+  const vec2 vj = first ? vec2(first->vx[j], first->vz[j]) : vec2(job.vx[j], job.vz[j]);
+  const float share = first && first->infeasible[j] == 0 ? 1.0f : 0.5f;
   const vec2 rel_p = pj - pi;
   const vec2 rel_v = vi - vj;
   const float dist2 = length_squared(rel_p);
@@ -287,14 +325,15 @@ HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j)
     }
   }
   const float gap = std::sqrt(dist2) - r;
-  return HalfPlane{vi + 0.5f * u, n, 1.0f / std::max(gap, kMinWeightGap)};
+  return HalfPlane{vi + share * u, n, 1.0f / std::max(gap, kMinWeightGap)};
 }
 
 // Collects agent i's obstacle half-planes into planes[0..); returns how many. Edges within reach (obstacle
 // horizon times max speed, plus the radius) are taken nearest first. For an agent outside every polygon, each
 // edge facing it gives the half-plane of the truncated velocity obstacle of that edge (the segment grown by the
-// radius, seen over obstacle_time_horizon) tangent at its point nearest the zero velocity, which the paper uses
-// for obstacles: dot(v, toward) <= (gap) / horizon, `toward` pointing at the edge's nearest point. Edges facing
+// radius, seen over obstacle_time_horizon) tangent at its point nearest the zero velocity (the paper's choice of
+// optimisation velocity for static obstacles, so standing still is always allowed):
+// dot(v, toward) <= gap / horizon, `toward` pointing at the edge's nearest point. Edges facing
 // away are skipped: reaching one means crossing a facing edge first (or, at a corner, the facing edge that shares
 // the corner), whose half-plane already forbids it. Rejected: RVO2-style legs from each vertex, which let agents
 // graze corners more tightly but need the neighbouring edges' geometry to stay consistent; the nearest-point
@@ -328,12 +367,12 @@ std::size_t obstacle_planes(const AvoidanceJob& job, std::uint32_t i, const ForE
     const Nearest candidate{d2, e};
     if (closer(candidate, nearest)) nearest = candidate;
     if (free_side(edges[e], p) >= 0.0f)
-      keep_nearest(facing.data(), facing_count, kAvoidanceMaxObstacleEdges, candidate);
+      keep_nearest_unique(facing.data(), facing_count, kAvoidanceMaxObstacleEdges, candidate);
   });
-  if (nearest.index == std::numeric_limits<std::uint32_t>::max()) return 0;
+  if (nearest.index() == std::numeric_limits<std::uint32_t>::max()) return 0;
 
   // Inside?
-  const ObstacleSet::Edge& ne = edges[nearest.index];
+  const ObstacleSet::Edge& ne = edges[nearest.index()];
   int where;
   const vec2 q = closest_on_edge(ne, p, where);
   bool inside;
@@ -346,24 +385,26 @@ std::size_t obstacle_planes(const AvoidanceJob& job, std::uint32_t i, const ForE
     inside = out.convex_at_a ? (behind_in && behind_out) : (behind_in || behind_out);
   }
   if (inside) {
-    const float d = std::sqrt(nearest.d2);
+    const float d = std::sqrt(nearest.d2());
     const vec2 exit = direction_or(q - p, outward_normal(ne));
     const float need = std::min((d + r) / job.params.dt, max_speed);
-    planes[0] = HalfPlane{exit * need, exit, 1.0f};
+    planes[0] = HalfPlane{exit * need, exit, 1.0f / kMinWeightGap};
     return 1;
   }
 
   const float inv_tau = 1.0f / job.params.obstacle_time_horizon;
   const float inv_dt = 1.0f / job.params.dt;
   for (std::uint32_t k = 0; k < facing_count; ++k) {
-    const ObstacleSet::Edge& e = edges[facing[k].index];
+    const ObstacleSet::Edge& e = edges[facing[k].index()];
     int w;
     const vec2 qe = closest_on_edge(e, p, w);
-    const float d = std::sqrt(facing[k].d2);
+    const float d = std::sqrt(facing[k].d2());
     const vec2 toward = direction_or(qe - p, -outward_normal(e));
     // dot(v, toward) <= limit, as {v : dot(v - toward * limit, -toward) >= 0}
     const float limit = d >= r ? (d - r) * inv_tau : std::max((d - r) * inv_dt, -max_speed);
-    planes[k] = HalfPlane{toward * limit, -toward, 1.0f};
+    // Weighted like a neighbour at the same gap, for when the obstacle planes alone leave nothing and join the
+    // fallback as soft ones.
+    planes[k] = HalfPlane{toward * limit, -toward, 1.0f / std::max(d - r, kMinWeightGap)};
   }
   return facing_count;
 }
@@ -371,18 +412,19 @@ std::size_t obstacle_planes(const AvoidanceJob& job, std::uint32_t i, const ForE
 // Agent i's new velocity from its chosen neighbours (sorted) and obstacle edges.
 template <class ForEachEdge>
 vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t neighbour_count,
-                 const ForEachEdge& for_each_edge) {
+                 const ForEachEdge& for_each_edge, const FirstPass* first, bool& infeasible) {
   std::array<HalfPlane, kMaxPlanes> planes;
   std::array<HalfPlane, kMaxPlanes> projected;
   const std::size_t hard = obstacle_planes(job, i, for_each_edge, planes.data());
   std::size_t count = hard;
   for (std::uint32_t k = 0; k < neighbour_count; ++k)
-    planes[count++] = agent_plane(job, i, neighbours[k].index);
+    planes[count++] = agent_plane(job, i, neighbours[k].index(), first);
 
   const float max_speed = job.max_speed[i];
   const vec2 preferred(job.pref_vx[i], job.pref_vz[i]);
   vec2 result;
   const std::size_t failed = solve_2d(planes.data(), count, max_speed, preferred, false, result);
+  infeasible = failed < count;
   if (failed < count) {
     // Obstacles stay hard unless they alone leave nothing (the agent wedged in a corner it overlaps).
     const std::size_t keep_hard = failed < hard ? 0 : hard;
@@ -392,7 +434,8 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
     // speed. So: relax every soft plane by the worst weighted violation found (plus a hair for rounding) and take
     // the velocity of that set nearest the preferred one, the ORCA objective again.
     float worst = 0.0f;
-    for (std::size_t k = keep_hard; k < count; ++k) worst = std::max(worst, planes[k].weight * violation(planes[k], result));
+    for (std::size_t k = keep_hard; k < count; ++k)
+      worst = std::max(worst, planes[k].weight * violation(planes[k], result));
     const float slack = worst * 1.001f + 1e-6f;
     for (std::size_t k = 0; k < count; ++k) {
       projected[k] = planes[k];
@@ -403,8 +446,12 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   }
   // Belt and braces: the LPs keep |result| <= max_speed up to rounding; never hand out a NaN or an overshoot.
   if (!(std::isfinite(result.x) && std::isfinite(result.y))) return vec2(0.0f);
-  const float l2 = length_squared(result);
-  if (l2 > max_speed * max_speed) result *= max_speed / std::sqrt(l2);
+  // In double: a float square of a 1e-29 m/s rounding residue underflows to 0 and would slip past max_speed 0.
+  const double l2 = static_cast<double>(result.x) * result.x + static_cast<double>(result.y) * result.y;
+  if (l2 > static_cast<double>(max_speed) * max_speed) {
+    const double scale = static_cast<double>(max_speed) / std::sqrt(l2);
+    result = vec2(static_cast<float>(result.x * scale), static_cast<float>(result.y * scale));
+  }
   return result;
 }
 
@@ -426,8 +473,9 @@ struct GridShape {
 };
 
 // Cells half the neighbour distance wide, so a 5 x 5 block holds every neighbour in range (half-width cells let
-// the search skip more of that area than a 3 x 3 block of full-width ones: 25 % faster at 10,000 agents); widened when the crowd
-// is spread so far that the grid would have many more cells than agents (bounding memory and the prefix sum).
+// the search skip more of that area than a 3 x 3 block of full-width ones: ~10 % faster at 10,000 agents);
+// widened when the crowd is spread so far that the grid would have many more cells than agents (bounding memory
+// and the prefix sum).
 GridShape grid_shape(const AvoidanceJob& job, std::size_t n) {
   double min_x = job.px[0], max_x = job.px[0], min_z = job.pz[0], max_z = job.pz[0];
   for (std::size_t i = 1; i < n; ++i) {
@@ -544,7 +592,8 @@ ObstacleSet::ObstacleSet(const std::vector<std::vector<glm::vec2>>& polygons, fl
     const vec2 c = 0.5f * (e.a + e.b);
     const vec2 half = 0.5f * glm::abs(e.b - e.a);
     // cell_span takes a square: use the larger half-extent (conservative).
-    if (!cell_span(c, std::max(half.x, half.y), x0, x1, z0, z1)) return;
+    // (padded by a thousandth of a cell, so rounding cannot drop an edge from a cell its end only touches)
+    if (!cell_span(c, std::max(half.x, half.y) + 1e-3f * cell_, x0, x1, z0, z1)) return;
     for (std::uint32_t z = z0; z <= z1; ++z)
       for (std::uint32_t x = x0; x <= x1; ++x) f(static_cast<std::size_t>(z) * cols_ + x);
   };
@@ -597,6 +646,9 @@ bool AvoidanceJob::run() const {
     s.cell_agents.resize(n);
     s.sorted_x.resize(n);
     s.sorted_z.resize(n);
+    s.infeasible.resize(n);
+    s.first_vx.resize(n);
+    s.first_vz.resize(n);
   }
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t c = g.cell_of(px[i], pz[i]);
@@ -628,46 +680,69 @@ bool AvoidanceJob::run() const {
   const std::span<const CellOffset> offsets(offsets_storage.data(), offset_count);
   const ObstacleSet* obstacle_set = obstacles;
   // Fixed chunks of 256 agents in grid order (a chunk is a patch of neighbouring cells, so the cells it scans
-  // stay in cache: 15 % faster at 10,000 agents than index order); each agent's result depends only on the
+  // stay in cache: ~13 % faster at 10,000 agents than index order); each agent's result depends only on the
   // inputs, so neither the order nor the chunking changes a bit.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::array<Nearest, kAvoidanceMaxNeighbors> nearest;
-    for (std::size_t slot = r.begin(); slot < r.end(); ++slot) {
-      const std::uint32_t i = s.cell_agents[slot];
-      const float x = px[i], z = pz[i];
-      const std::uint32_t c = s.agent_cell[i];
-      const std::uint32_t cx = c % g.cols, cz = c / g.cols;
-      std::uint32_t count = 0;
-      // Cells nearest first (the block's rings), each skipped when even its nearest point is farther than the
-      // current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could not
-      // enter the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
-      for (const CellOffset& o : offsets) {
-        const std::int64_t xx = static_cast<std::int64_t>(cx) + o.dx, zz = static_cast<std::int64_t>(cz) + o.dz;
-        if (xx < 0 || zz < 0 || xx >= g.cols || zz >= g.rows) continue;
-        const double x0 = g.origin_x + static_cast<double>(xx) * g.cell, z0 = g.origin_z + static_cast<double>(zz) * g.cell;
-        const double ex = std::max({0.0, x0 - x, x - (x0 + g.cell)}), ez = std::max({0.0, z0 - z, z - (z0 + g.cell)});
-        const float limit = count < capacity ? reach2 : nearest[count - 1].d2;
-        if (ex * ex + ez * ez > static_cast<double>(limit) * (1.0 + 1e-4) + 1e-6) continue;
-        const std::size_t cell = static_cast<std::size_t>(zz) * g.cols + static_cast<std::size_t>(xx);
-        for (std::uint32_t k = s.cell_start[cell]; k < s.cell_start[cell + 1]; ++k) {
-          const float dx = s.sorted_x[k] - x, dz = s.sorted_z[k] - z;
-          const float d2 = dx * dx + dz * dz;
-          if (!(d2 < reach2)) continue;
-          if (count == capacity && d2 > nearest[count - 1].d2) continue;
-          const std::uint32_t j = s.cell_agents[k];
-          if (j != i) keep_nearest(nearest.data(), count, capacity, Nearest{d2, j});
+  auto pass = [&](const FirstPass* first) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::array<Nearest, kAvoidanceMaxNeighbors> nearest;
+      for (std::size_t slot = r.begin(); slot < r.end(); ++slot) {
+        const std::uint32_t i = s.cell_agents[slot];
+        if (first != nullptr && first->infeasible[i] == 0) continue;
+        const float x = px[i], z = pz[i];
+        const std::uint32_t c = s.agent_cell[i];
+        const std::uint32_t cx = c % g.cols, cz = c / g.cols;
+        std::uint32_t count = 0;
+        // Cells nearest first (the block's rings), each skipped when even its nearest point is farther than the
+        // current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could not
+        // enter the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
+        for (const CellOffset& o : offsets) {
+          const std::int64_t xx = static_cast<std::int64_t>(cx) + o.dx, zz = static_cast<std::int64_t>(cz) + o.dz;
+          if (xx < 0 || zz < 0 || xx >= g.cols || zz >= g.rows) continue;
+          const double x0 = g.origin_x + static_cast<double>(xx) * g.cell;
+          const double z0 = g.origin_z + static_cast<double>(zz) * g.cell;
+          // Nested two-argument max (maxsd), not std::max({...}): the initializer-list form became a loop whose
+          // branch was a fifth of the job's mispredictions (callgrind).
+          const double ex = std::max(0.0, std::max(x0 - x, x - (x0 + g.cell)));
+          const double ez = std::max(0.0, std::max(z0 - z, z - (z0 + g.cell)));
+          const float limit = count < capacity ? reach2 : nearest[count - 1].d2();
+          if (ex * ex + ez * ez > static_cast<double>(limit) * (1.0 + 1e-4) + 1e-6) continue;
+          const std::size_t cell = static_cast<std::size_t>(zz) * g.cols + static_cast<std::size_t>(xx);
+          for (std::uint32_t k = s.cell_start[cell]; k < s.cell_start[cell + 1]; ++k) {
+            const float dx = s.sorted_x[k] - x, dz = s.sorted_z[k] - z;
+            const float d2 = dx * dx + dz * dz;
+            if (!(d2 < reach2)) continue;
+            if (count == capacity && d2 > nearest[count - 1].d2()) continue;
+            const std::uint32_t j = s.cell_agents[k];
+            if (j != i) keep_nearest(nearest.data(), count, capacity, Nearest{d2, j});
+          }
         }
+        const vec2 p(x, z);
+        const float edge_reach = params.obstacle_time_horizon * max_speed[i] + radius[i];
+        auto edges = [&](auto&& visit) {
+          if (obstacle_set != nullptr) obstacle_set->for_each_edge_near(p, edge_reach, visit);
+        };
+        bool infeasible = false;
+        const vec2 v = solve_agent(*this, i, nearest.data(), count, edges, first, infeasible);
+        if (first == nullptr) s.infeasible[i] = infeasible ? 1 : 0;
+        new_vx[i] = v.x;
+        new_vz[i] = v.y;
       }
-      const vec2 p(x, z);
-      const float edge_reach = params.obstacle_time_horizon * max_speed[i] + radius[i];
-      auto edges = [&](auto&& visit) {
-        if (obstacle_set != nullptr) obstacle_set->for_each_edge_near(p, edge_reach, visit);
-      };
-      const vec2 v = solve_agent(*this, i, nearest.data(), count, edges);
-      new_vx[i] = v.x;
-      new_vz[i] = v.y;
-    }
-  });
+    });
+  };
+  pass(nullptr);
+  // The second pass (see FirstPass): only the agents whose half-planes left nothing, against what their
+  // neighbours chose in the first. Measured on the test's 128-agent circle: steps with an overlap 44 -> 32, the
+  // deepest 6.0 -> 4.1 cm; callgrind on the benchmark's 10,000 agents: 13 % more instructions.
+  // Rejected: iterating to convergence (each pass is as costly as the first in a jam) and running the second
+  // pass for every agent (the ones that succeeded already satisfy their neighbours' half-planes).
+  if (params.second_pass &&
+      std::find(s.infeasible.begin(), s.infeasible.begin() + static_cast<std::ptrdiff_t>(n), 1) !=
+          s.infeasible.begin() + static_cast<std::ptrdiff_t>(n)) {
+    std::copy(new_vx.begin(), new_vx.end(), s.first_vx.begin());
+    std::copy(new_vz.begin(), new_vz.end(), s.first_vz.begin());
+    const FirstPass first{s.first_vx.data(), s.first_vz.data(), s.infeasible.data()};
+    pass(&first);
+  }
   return true;
 }
 
@@ -676,21 +751,34 @@ bool run_avoidance_reference(const AvoidanceJob& job) {
   const std::size_t n = job.px.size();
   const float reach2 = job.params.neighbor_distance * job.params.neighbor_distance;
   std::array<Nearest, kAvoidanceMaxNeighbors> nearest;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    std::uint32_t count = 0;
-    for (std::uint32_t j = 0; j < n; ++j) {
-      if (j == i) continue;
-      const float dx = job.px[j] - job.px[i], dz = job.pz[j] - job.pz[i];
-      const float d2 = dx * dx + dz * dz;
-      if (d2 < reach2) keep_nearest(nearest.data(), count, job.params.max_neighbors, Nearest{d2, j});
+  std::vector<std::uint8_t> infeasible(n, 0);  // the twin may allocate: it is for tests
+  std::vector<float> first_vx(n), first_vz(n);
+  const FirstPass second{first_vx.data(), first_vz.data(), infeasible.data()};
+  for (const FirstPass* first : {static_cast<const FirstPass*>(nullptr), &second}) {
+    if (first != nullptr) {
+      if (!job.params.second_pass || std::find(infeasible.begin(), infeasible.end(), 1) == infeasible.end()) break;
+      std::copy(job.new_vx.begin(), job.new_vx.end(), first_vx.begin());
+      std::copy(job.new_vz.begin(), job.new_vz.end(), first_vz.begin());
     }
-    auto edges = [&](auto&& visit) {
-      if (job.obstacles == nullptr) return;
-      for (std::uint32_t e = 0; e < job.obstacles->edges().size(); ++e) visit(e);
-    };
-    const vec2 v = solve_agent(job, i, nearest.data(), count, edges);
-    job.new_vx[i] = v.x;
-    job.new_vz[i] = v.y;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      if (first != nullptr && infeasible[i] == 0) continue;
+      std::uint32_t count = 0;
+      for (std::uint32_t j = 0; j < n; ++j) {
+        if (j == i) continue;
+        const float dx = job.px[j] - job.px[i], dz = job.pz[j] - job.pz[i];
+        const float d2 = dx * dx + dz * dz;
+        if (d2 < reach2) keep_nearest(nearest.data(), count, job.params.max_neighbors, Nearest{d2, j});
+      }
+      auto edges = [&](auto&& visit) {
+        if (job.obstacles == nullptr) return;
+        for (std::uint32_t e = 0; e < job.obstacles->edges().size(); ++e) visit(e);
+      };
+      bool failed = false;
+      const vec2 v = solve_agent(job, i, nearest.data(), count, edges, first, failed);
+      if (first == nullptr) infeasible[i] = failed ? 1 : 0;
+      job.new_vx[i] = v.x;
+      job.new_vz[i] = v.y;
+    }
   }
   return true;
 }
