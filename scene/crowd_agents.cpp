@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <string>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -124,6 +126,12 @@ void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& s
   std::vector<std::vector<glm::vec2>> polygons;
   for (const ScenarioPolygon& p : scenario.obstacles) polygons.push_back(p.points);
   agents->obstacles = std::make_unique<ObstacleSet>(polygons);
+  if (const char* v = std::getenv("STRATA_ORCA_HORIZON")) agents->avoidance.time_horizon = std::stof(v);
+  if (const char* v = std::getenv("STRATA_ORCA_MARGIN")) agents->radius_margin = std::stof(v);
+  if (const char* v = std::getenv("STRATA_WOBBLE")) agents->steering.wobble = std::stof(v);
+  if (const char* v = std::getenv("STRATA_CORNER")) agents->steering.corner_reached = std::stof(v);
+  if (const char* v = std::getenv("STRATA_OBST_HORIZON")) agents->avoidance.obstacle_time_horizon = std::stof(v);
+  if (const char* v = std::getenv("STRATA_NEIGHBORS")) agents->avoidance.max_neighbors = static_cast<std::uint32_t>(std::stoul(v));
   agents->move.turn_rate = m.style.turn_rate;
   agents->move.turn_in_place_rate = m.style.turn_in_place_rate;
   agents->move.acceleration = m.style.agent_acceleration;
@@ -159,7 +167,7 @@ void run_navigation_stage(Crowd& crowd, float dt) {
   CrowdAgents& a = *crowd.agents;
   const Scenario& sc = a.scenario;
   for_each_agent_table(crowd, [&](SoaTable& t, std::uint32_t) {
-    run_or_throw(make_steer_job(t, a.goals, sc.ground_min, sc.ground_max, a.steering, dt), "steer");
+    run_or_throw(make_steer_job(t, a.goals, sc.ground_min, sc.ground_max, a.steering, a.move, dt), "steer");
   });
   // Staggered planning: those without a path first, then the most overdue; ties by entity index, so the choice
   // is the same whatever table a walker sits in.

@@ -19,27 +19,23 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
   const ColumnView<float>& a = job.agent;
   const float dt = job.dt;
   const AgentMoveParameters& p = job.params;
-  const float desired_x = a.at(kAgentOrcaVx, i), desired_z = a.at(kAgentOrcaVz, i);
-  const float desired_speed = std::hypot(desired_x, desired_z);
-  float heading = a.at(kAgentHeading, i);
-  float speed = std::hypot(a.at(kAgentVx, i), a.at(kAgentVz, i));
-  float target_speed = 0.0f;
-  if (job.gait.at(kGaitIdle, i) > 0.0f) {
-    // Leaving (or settling into) the idle stance: the feet are down side by side and the body waits for them.
-    speed = 0.0f;
-  } else if (desired_speed > 1e-4f) {
-    const float want = std::atan2(desired_x, desired_z);
-    const float most = turn_rate_at(speed, p.turn_rate, p.turn_in_place_rate) * dt;
-    heading = wrap_angle(heading + std::clamp(wrap_angle(want - heading), -most, most));
-    // Facing away from where it should go, it slows (to a stop past 90 degrees) while it turns.
-    target_speed = desired_speed * std::max(std::cos(wrap_angle(want - heading)), 0.0f);
+  float vx = a.at(kAgentOrcaVx, i), vz = a.at(kAgentOrcaVz, i);
+  // Leaving (or settling into) the idle stance: the feet are down side by side and the body waits for them.
+  if (job.gait.at(kGaitIdle, i) > 0.0f) vx = vz = 0.0f;
+  const float speed = std::hypot(vx, vz);
+  // The body faces where it wants to go (its preferred velocity), or, wanting nothing, where it goes. Pushed aside
+  // or back by avoidance it steps that way without turning round: facing its velocity made pushed agents turn
+  // their backs on their goal and take seconds to turn back (half a test room never reached its door).
+  float face_x = a.at(kAgentPrefVx, i), face_z = a.at(kAgentPrefVz, i);
+  if (std::hypot(face_x, face_z) < 0.05f) {
+    face_x = vx;
+    face_z = vz;
   }
-  const float change = target_speed - speed;
-  speed += std::clamp(change, -p.braking * dt, p.acceleration * dt);
-  speed = std::max(speed, 0.0f);
-  // The body walks where it faces. Rejected: moving along avoidance's direction with the body turning after it,
-  // which crabbed sideways at walking speed (the legs crossed and IK missed its goals by decimetres).
-  const float vx = std::sin(heading) * speed, vz = std::cos(heading) * speed;
+  float heading = a.at(kAgentHeading, i);
+  if (std::hypot(face_x, face_z) > 0.05f) {
+    const float most = turn_rate_at(speed, p.turn_rate, p.turn_in_place_rate) * dt;
+    heading = wrap_angle(heading + std::clamp(wrap_angle(std::atan2(face_x, face_z) - heading), -most, most));
+  }
   a.at(kAgentVx, i) = vx;
   a.at(kAgentVz, i) = vz;
   a.at(kAgentPx, i) += vx * dt;
@@ -75,6 +71,24 @@ float agent_path_distance(const ColumnView<const float>& agent, const ColumnView
   }
   // Beyond the corners kept (or with none): straight on to the goal.
   return d + std::hypot(agent.at(kAgentGoalX, i) - x, agent.at(kAgentGoalZ, i) - z);
+}
+
+glm::vec2 followable_velocity(glm::vec2 wish, float heading, float speed, const AgentMoveParameters& p, float dt) {
+  const float wish_speed = std::hypot(wish.x, wish.y);
+  if (!(wish_speed > 1e-4f)) return {0.0f, 0.0f};
+  const float want = std::atan2(wish.x, wish.y);
+  const float most = turn_rate_at(speed, p.turn_rate, p.turn_in_place_rate) * dt;
+  const float direction = wrap_angle(heading + std::clamp(wrap_angle(want - heading), -most, most));
+  // Facing away from where it should go, it slows (to a stop past 90 degrees) while it turns.
+  // Facing away, it still creeps at start_speed in the direction it has turned to: that keeps it stepping round on
+  // the spot. A zero wish there made it stand, and a standing body never turned: agents facing a wall stayed so.
+  float target = std::max(wish_speed * std::max(std::cos(wrap_angle(want - direction)), 0.0f),
+                          std::min(wish_speed, p.start_speed));
+  // From standing a first step starts at start_speed: limiting the wish to speed + a dt from rest kept it below the
+  // speed at which a walker leaves its stance, and nobody ever set off.
+  target = std::clamp(target, std::max(speed - p.braking * dt, 0.0f), std::max(speed, p.start_speed) + p.acceleration * dt);
+  target = std::min(target, wish_speed);
+  return {std::sin(direction) * target, std::cos(direction) * target};
 }
 
 bool AgentMoveJob::validate() const {

@@ -1,20 +1,22 @@
 #pragma once
-// Agent motion: moves each steered agent with the velocity avoidance chose, as a body can. The agent walks where it
-// faces and turns towards that velocity at a limited rate (GaitStyle::turn_rate), slowing while it faces away from
-// it (a person turns before walking off, and turns on the spot rather than walking backwards), and its speed
-// changes within acceleration and braking limits (GaitStyle::agent_acceleration, agent_braking). A walker standing (kGaitIdle > 0, systems/locomotion.h) is held still until it
-// has left its stance. Also keeps the bookkeeping `report crowd` reads: time travelling, and time since the agent
-// last came nearer its goal along its path (stuck detection).
+// Agent motion: moves each steered agent with exactly the velocity avoidance chose (its collision-free guarantee
+// holds for that velocity and no other) and turns the body towards it at a limited rate (GaitStyle::turn_rate), or,
+// nearly still, towards where it wants to go (turning on the spot). What makes the motion one a body can walk is
+// upstream: navigation's preferred velocity goes through followable_velocity below (turning, slowing while facing
+// away, acceleration and braking limits), and avoidance departs from it only to avoid someone. A walker standing
+// (kGaitIdle > 0, systems/locomotion.h) is held still until it has left its stance. Also keeps the bookkeeping
+// `report crowd` reads: time travelling, and time since the agent last came nearer its goal along its path (stuck
+// detection).
 //
-// Avoidance's guarantee holds for the velocity it returns; a slower one in the same direction can fall outside it,
-// which is why the frame script gives avoidance radii a small margin over the bodies' (scene/crowd_agents.h).
-// Rejected: feeding these limits into the linear program as constraints; ORCA's 3-D fallback then fires whenever
-// the limits and the half-planes disagree, and agents froze in dense crossings.
+// Rejected: limiting avoidance's velocity here (the body turning and accelerating after it). The velocity then
+// left the set avoidance had proved collision-free, and a 24-agent circle overlapped by 10 cm.
 //
-//   reads:  agent (avoidance velocity, position, velocity, heading, goal, corners), gait (idle), dt, parameters
+//   reads:  agent (avoidance velocity, preferred velocity, position, heading, goal, corners), gait (idle), dt
 //   writes: agent (position, velocity, heading, best distance, time since progress, travel time)
 #include <cstddef>
 #include <cstdint>
+
+#include <glm/vec2.hpp>
 
 #include "ecs/column_view.h"
 
@@ -35,8 +37,15 @@ struct AgentMoveParameters {
   float turn_in_place_rate = 1.0f;  // rad/s, standing
   float acceleration = 1.2f;   // m/s^2 when speeding up
   float braking = 1.5f;        // m/s^2 when slowing down
+  float start_speed = 0.15f;   // m/s a standing body may start at (above GaitStyle::stand_speed)
   float progress_step = 0.25f; // m: coming this much nearer the goal counts as progress
 };
+
+// The velocity a walking body can take up this step on its way to `wish`: turned from its heading by at most its
+// turn rate, slowed while it faces away (to a stop past 90 degrees: it turns on the spot), within acceleration and
+// braking limits of its current `speed`, never faster than the wish. Navigation passes its preferred velocity
+// through this (systems/navigation.h), so avoidance starts from a velocity the body can follow.
+glm::vec2 followable_velocity(glm::vec2 wish, float heading, float speed, const AgentMoveParameters& params, float dt);
 
 struct AgentMoveJob {
   ColumnView<float> agent;                   // kAgentFloats, read and written

@@ -68,37 +68,50 @@ struct GroundTrack {
   float distance = 0.0f;                 // path distance (path mode) or odometer (agents), now
   float speed = 0.0f;                    // m/s: the gait's along a path, the agent's |velocity|
   glm::vec2 position{0.0f};  // agents: ground (x, z); the body moves along its heading (systems/agent_move.h)
-  float heading = 0.0f;      // agents: facing and direction of travel now
-  float turn = 0.0f;         // agents: how far it still turns towards the velocity avoidance wants (rad, signed)
+  glm::vec2 velocity{0.0f};  // agents: m/s
+  float heading = 0.0f;      // agents: facing now
+  float turn = 0.0f;         // agents: how far the body still turns to face its velocity (rad, signed)
+  float course_turn = 0.0f;  // agents: how far its velocity still turns towards its steering target (rad, signed)
   float turn_rate = 0.0f;    // agents: rad/s
   float stop_distance = -1.0f;  // agents: metres it has left to brake to a stop; < 0 when it is not stopping
   float speed_ratio = 1.0f;  // agents: |velocity| over the gait's speed at its cadence, in [0, 1]
 
   // The pelvis `ahead` seconds from now (negative: in the past), `extra` metres further along its way.
-  // Agents: at today's speed, turning at turn_rate until it faces where avoidance sends it (an arc, then a straight
-  // line), and no further than its braking distance when it is stopping. A straight-line prediction put the
-  // footprints of a 90-degree turn ~0.3 m outside the body's arc, and the legs could not reach them.
+  // Agents: along today's velocity (its turns are gentle: navigation's preferred velocity turns at the body's
+  // rate, systems/agent_move.h), no further than its braking distance when it is stopping, the body turning at
+  // turn_rate until it faces its velocity; the swing foot re-aims every frame, so the prediction is never far
+  // from where the foot lands.
   Pose2 at(float ahead, float extra = 0.0f) const {
     if (path) return path_pose(*path, distance + speed * ahead + extra);
+    const glm::vec2 along = speed > 1e-6f ? velocity / speed : glm::vec2(std::sin(heading), std::cos(heading));
     if (ahead <= 0.0f) {
-      const glm::vec2 p = position + (speed * ahead + extra) * glm::vec2(std::sin(heading), std::cos(heading));
+      const glm::vec2 p = position + speed * ahead * along + extra * glm::vec2(std::sin(heading), std::cos(heading));
       return {{p.x, 0.0f, p.y}, heading};
     }
     float travel = speed * ahead;
     if (stop_distance >= 0.0f) travel = std::min(travel, stop_distance);
+    // The direction of travel turns towards the steering target at turn_rate (navigation turns the wish that
+    // way): an arc, then a straight line; the body faces along it.
+    float hv = std::atan2(along.x, along.y);
     glm::vec2 p = position;
-    float h = heading;
-    const float turn_time = turn_rate > 0.0f ? std::abs(turn) / turn_rate : 0.0f;
-    const float arc = std::min(travel, speed * turn_time);
-    if (arc > 1e-5f && std::abs(turn) > 1e-4f) {
-      // Heading h0 + w t over the arc, w = +-turn_rate; dir(h) = (sin h, cos h) integrated in closed form.
-      const float w = turn > 0.0f ? turn_rate : -turn_rate;
-      const float t = arc / speed;
-      const float h1 = h + w * t;
-      p += (speed / w) * glm::vec2(std::cos(h) - std::cos(h1), std::sin(h1) - std::sin(h));
-      h = h1;
+    const float turn_time = turn_rate > 0.0f ? std::abs(course_turn) / turn_rate : 0.0f;
+    const float arc = speed > 1e-4f ? std::min(travel, speed * turn_time) : 0.0f;
+    if (arc > 1e-5f && std::abs(course_turn) > 1e-4f) {
+      const float w = course_turn > 0.0f ? turn_rate : -turn_rate;
+      const float h1 = hv + w * (arc / speed);
+      p += (speed / w) * glm::vec2(std::cos(hv) - std::cos(h1), std::sin(h1) - std::sin(hv));
+      hv = h1;
     }
-    p += (travel - arc + extra) * glm::vec2(std::sin(h), std::cos(h));
+    p += (travel - arc) * glm::vec2(std::sin(hv), std::cos(hv));
+    // The body's own heading catches up with its course at turn_rate.
+    const float most = turn_rate * ahead;
+    // Facing `turn` off its heading now: where it wants to go, which keeps its offset from the course (zero
+    // unless avoidance pushes it aside) as the course turns.
+    const float course_now = std::atan2(along.x, along.y);
+    const float h = speed > 0.05f
+                        ? heading + std::clamp(wrap_angle(hv + wrap_angle(heading + turn - course_now) - heading), -most, most)
+                        : heading + std::clamp(turn, -most, most);
+    p += extra * glm::vec2(std::sin(h), std::cos(h));
     return {{p.x, 0.0f, p.y}, h};
   }
   float distance_at(float ahead, float extra = 0.0f) const { return distance + speed * ahead + extra; }
@@ -325,8 +338,14 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
     track.heading = a.at(kAgentHeading, i);
     track.speed = std::hypot(a.at(kAgentVx, i), a.at(kAgentVz, i));
     track.turn_rate = turn_rate_at(track.speed, style.turn_rate, style.turn_in_place_rate);
-    const float wish_x = a.at(kAgentOrcaVx, i), wish_z = a.at(kAgentOrcaVz, i);
-    if (std::hypot(wish_x, wish_z) > 1e-3f) track.turn = wrap_angle(std::atan2(wish_x, wish_z) - track.heading);
+    // The body moves with its velocity and turns to face where it wants to go (agent_move.h).
+    track.velocity = {a.at(kAgentVx, i), a.at(kAgentVz, i)};
+    glm::vec2 face = {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)};
+    if (glm::length(face) < 0.05f) face = track.velocity;
+    if (glm::length(face) > 0.05f) track.turn = wrap_angle(std::atan2(face.x, face.y) - track.heading);
+    const glm::vec2 to_target = glm::vec2(a.at(kAgentTargetX, i), a.at(kAgentTargetZ, i)) - track.position;
+    if (track.speed > 0.05f && glm::length(to_target) > 0.3f)
+      track.course_turn = wrap_angle(std::atan2(to_target.x, to_target.y) - std::atan2(track.velocity.x, track.velocity.y));
     if (std::hypot(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)) < style.stand_speed)
       track.stop_distance = track.speed * track.speed / (2.0f * style.agent_braking);
     g[kGaitCadenceTarget] = g[kGaitCadence] = agent_cadence(track.speed, g[kGaitHeight], style);

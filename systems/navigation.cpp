@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -99,7 +100,22 @@ void steer_one(const SteerJob& job, std::size_t i) {
   float speed = a.at(kAgentPrefSpeed, i);
   if (final_leg && spec.kind != GoalKind::Waypoints && spec.kind != GoalKind::Random)
     speed *= std::clamp(distance / job.params.slow_radius, 0.0f, 1.0f);
-  const glm::vec2 pref = distance > 1e-4f ? to * (speed / distance) : glm::vec2(0.0f);
+  glm::vec2 wish = distance > 1e-4f ? to * (speed / distance) : glm::vec2(0.0f);
+  // A small seeded wobble of the wished direction breaks the symmetric standoffs reciprocal avoidance is prone to
+  // (two agents meeting exactly head-on, a ring converging on its centre), where every agent's best answer is to
+  // wait for the others.
+  if (job.params.wobble > 0.0f && distance > 1e-4f) {
+    std::uint32_t& rng = job.state.at(kAgentSeed, i);
+    const float angle = job.params.wobble * (2.0f * uniform(rng) - 1.0f);
+    const float c = std::cos(angle), s = std::sin(angle);
+    wish = {c * wish.x - s * wish.y, s * wish.x + c * wish.y};
+  }
+  static const bool raw = std::getenv("STRATA_RAW_PREF") != nullptr;
+  // Accelerating from the last preferred speed, not from the velocity avoidance allowed: in a crowd avoidance
+  // slows everyone for a moment, and wishes limited to that slower speed kept the whole crowd crawling (the
+  // bottleneck emptied at 0.13 agents a second).
+  const float last_pref = std::hypot(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i));
+  const glm::vec2 pref = raw ? wish : followable_velocity(wish, a.at(kAgentHeading, i), last_pref, job.body, job.dt);
   a.at(kAgentPrefVx, i) = pref.x;
   a.at(kAgentPrefVz, i) = pref.y;
 }
@@ -192,7 +208,8 @@ bool PlanJob::run() const {
 }
 
 SteerJob make_steer_job(SoaTable& walkers, std::span<const ScenarioGoal> goals, glm::vec2 ground_min,
-                        glm::vec2 ground_max, const SteeringParameters& params, float dt) {
+                        glm::vec2 ground_max, const SteeringParameters& params, const AgentMoveParameters& body,
+                        float dt) {
   SteerJob job;
   job.agent = f32_view(walkers, kWalkerAgent);
   job.state = u32_view(walkers, kWalkerAgentState);
@@ -201,6 +218,7 @@ SteerJob make_steer_job(SoaTable& walkers, std::span<const ScenarioGoal> goals, 
   job.ground_min = ground_min;
   job.ground_max = ground_max;
   job.params = params;
+  job.body = body;
   job.dt = dt;
   return job;
 }

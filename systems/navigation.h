@@ -3,7 +3,8 @@
 //
 // SteerJob (every agent, every step, in parallel): arrival at the goal (within its radius) and the next goal for
 // waypoint cycles and random goals; advancing past path corners as they are reached; the preferred velocity,
-// towards the first corner at the agent's preferred speed, easing to a stop at a final goal; and the flag asking
+// towards the first corner at the agent's preferred speed, easing to a stop at a final goal, as far as the body can
+// follow this step (agent_move.h followable_velocity: turning, acceleration); and the flag asking
 // for a new path (a new goal, no corners left, or the periodic replan is due).
 //
 // PlanJob (the agents the frame script picked this step, serially, with one Detour query): a path on the
@@ -26,6 +27,7 @@
 #include "components/scenario.h"
 #include "components/walker.h"
 #include "ecs/column_view.h"
+#include "systems/agent_move.h"
 
 namespace strata {
 
@@ -35,6 +37,7 @@ struct SteeringParameters {
   float corner_reached = 0.5f;  // m: a corner this near is passed (the next one steered at)
   float slow_radius = 1.5f;     // m: an agent eases its speed down over this distance before a final goal
   float replan_period = 3.0f;   // s between an agent's replans
+  float wobble = 0.1f;          // rad: seeded jitter of the wished direction, to break symmetric standoffs
 };
 
 struct SteerJob {
@@ -44,6 +47,7 @@ struct SteerJob {
   std::span<const ScenarioGoal> goals;     // per group (kAgentGroup indexes it)
   glm::vec2 ground_min{0.0f}, ground_max{0.0f};  // random goals are drawn inside, 1 m in from the edge
   SteeringParameters params;
+  AgentMoveParameters body;  // what a walking body can follow (systems/agent_move.h followable_velocity)
   float dt = 0.0f;
 
   bool validate() const;
@@ -64,7 +68,8 @@ struct PlanJob {
 };
 
 SteerJob make_steer_job(SoaTable& walkers, std::span<const ScenarioGoal> goals, glm::vec2 ground_min,
-                        glm::vec2 ground_max, const SteeringParameters& params, float dt);
+                        glm::vec2 ground_max, const SteeringParameters& params, const AgentMoveParameters& body,
+                        float dt);
 PlanJob make_plan_job(SoaTable& walkers, NavQuery& query, std::span<const std::uint32_t> rows,
                       std::span<const ScenarioGoal> goals, float replan_period);
 

@@ -64,8 +64,15 @@ struct AgentWalker {
   void frame(glm::vec2 wish, float dt) {
     Crowd& c = *crowd;
     SoaTable& t = table();
-    t.f32(kWalkerAgent, kAgentOrcaVx)[0] = t.f32(kWalkerAgent, kAgentPrefVx)[0] = wish.x;
-    t.f32(kWalkerAgent, kAgentOrcaVz)[0] = t.f32(kWalkerAgent, kAgentPrefVz)[0] = wish.y;
+    // As navigation does: the wish goes through what the body can follow; no one to avoid, so avoidance would
+    // return it unchanged.
+    const glm::vec2 pref = followable_velocity(wish, t.f32(kWalkerAgent, kAgentHeading)[0],
+                                               std::hypot(t.f32(kWalkerAgent, kAgentVx)[0], t.f32(kWalkerAgent, kAgentVz)[0]),
+                                               move, dt);
+    t.f32(kWalkerAgent, kAgentTargetX)[0] = t.f32(kWalkerAgent, kAgentPx)[0] + 10.0f * wish.x;
+    t.f32(kWalkerAgent, kAgentTargetZ)[0] = t.f32(kWalkerAgent, kAgentPz)[0] + 10.0f * wish.y;
+    t.f32(kWalkerAgent, kAgentOrcaVx)[0] = t.f32(kWalkerAgent, kAgentPrefVx)[0] = pref.x;
+    t.f32(kWalkerAgent, kAgentOrcaVz)[0] = t.f32(kWalkerAgent, kAgentPrefVz)[0] = pref.y;
     run_or_throw(make_agent_move_job(t, dt, move), "agent_move");
     run_or_throw(make_locomotion_job(*c.motion.locomotion, c.motion.paths, t, dt, c.motion.style, true), "locomotion");
     run_or_throw(make_ik_job(c.rig().skeleton, c.motion.locomotion->limbs, t), "ik");
