@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <string>
 #include <cmath>
 #include <random>
@@ -126,12 +125,6 @@ void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& s
   std::vector<std::vector<glm::vec2>> polygons;
   for (const ScenarioPolygon& p : scenario.obstacles) polygons.push_back(p.points);
   agents->obstacles = std::make_unique<ObstacleSet>(polygons);
-  if (const char* v = std::getenv("STRATA_ORCA_HORIZON")) agents->avoidance.time_horizon = std::stof(v);
-  if (const char* v = std::getenv("STRATA_ORCA_MARGIN")) agents->radius_margin = std::stof(v);
-  if (const char* v = std::getenv("STRATA_WOBBLE")) agents->steering.wobble = std::stof(v);
-  if (const char* v = std::getenv("STRATA_CORNER")) agents->steering.corner_reached = std::stof(v);
-  if (const char* v = std::getenv("STRATA_OBST_HORIZON")) agents->avoidance.obstacle_time_horizon = std::stof(v);
-  if (const char* v = std::getenv("STRATA_NEIGHBORS")) agents->avoidance.max_neighbors = static_cast<std::uint32_t>(std::stoul(v));
   agents->move.turn_rate = m.style.turn_rate;
   agents->move.turn_in_place_rate = m.style.turn_in_place_rate;
   agents->move.acceleration = m.style.agent_acceleration;

@@ -37,9 +37,10 @@ struct CrowdAgents {
   AvoidanceParameters avoidance;
   SteeringParameters steering;
   AgentMoveParameters move;
-  // Avoidance keeps discs this much wider than the bodies: the body follows avoidance's velocity within turning
-  // and acceleration limits (systems/agent_move.h), and the margin absorbs the difference.
-  float radius_margin = 0.06f;
+  // Avoidance keeps discs this much wider than the bodies: agents move with avoidance's velocity except while a
+  // walker leaves its idle stance (agent_move.h holds it still), and the margin absorbs that. 6 cm packed dense
+  // crowds so tight that far more of them stalled (crossing: 31 % through in 90 s against 55 % with 2 cm).
+  float radius_margin = 0.02f;
   std::uint32_t plans_per_step = 24;  // most paths planned in one step (those without a path first)
   double navigation_build_ms = 0;     // building (or loading) the navigation mesh
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -54,6 +53,23 @@ void steer_one(const SteerJob& job, std::size_t i) {
   const ScenarioGoal& spec = job.goals[group];
   a.at(kAgentReplanIn, i) -= job.dt;
 
+  // A region goal is reached on entering the region: the agent still walks on to its own point in it, but agents
+  // standing at theirs would otherwise keep the last ones from ever reaching a point near them.
+  if (spec.kind == GoalKind::Region && pos.x >= spec.region_min.x && pos.x <= spec.region_max.x &&
+      pos.y >= spec.region_min.y && pos.y <= spec.region_max.y)
+    job.state.at(kAgentFlags, i) |= kAgentArrived;
+  // An agent that has reached its final goal (entered its region) and makes no headway to its own point stops
+  // there: two agents pressing for points behind each other wait for ever under reciprocal avoidance.
+  const bool final_goal = spec.kind != GoalKind::Waypoints && spec.kind != GoalKind::Random;
+  if (final_goal && (job.state.at(kAgentFlags, i) & kAgentArrived) != 0u &&
+      a.at(kAgentSinceProgress, i) > job.params.settle_after && glm::length(goal - pos) > 1e-3f) {
+    goal = pos;
+    a.at(kAgentGoalX, i) = pos.x;
+    a.at(kAgentGoalZ, i) = pos.y;
+    c.at(0, i) = pos.x;
+    c.at(1, i) = pos.y;
+    c.at(kAgentCorners * 2, i) = 1.0f;
+  }
   // Arrival, and the next goal where the group has one.
   if (glm::length(goal - pos) < a.at(kAgentGoalRadius, i)) {
     job.state.at(kAgentFlags, i) |= kAgentArrived;
@@ -106,16 +122,17 @@ void steer_one(const SteerJob& job, std::size_t i) {
   // wait for the others.
   if (job.params.wobble > 0.0f && distance > 1e-4f) {
     std::uint32_t& rng = job.state.at(kAgentSeed, i);
-    const float angle = job.params.wobble * (2.0f * uniform(rng) - 1.0f);
+    // Stronger the longer it has made no headway (up to 4x after 3 s), so a standoff does not last.
+    const float wobble = job.params.wobble * (1.0f + std::min(a.at(kAgentSinceProgress, i) / 1.0f, 3.0f));
+    const float angle = wobble * (2.0f * uniform(rng) - 1.0f);
     const float c = std::cos(angle), s = std::sin(angle);
     wish = {c * wish.x - s * wish.y, s * wish.x + c * wish.y};
   }
-  static const bool raw = std::getenv("STRATA_RAW_PREF") != nullptr;
   // Accelerating from the last preferred speed, not from the velocity avoidance allowed: in a crowd avoidance
   // slows everyone for a moment, and wishes limited to that slower speed kept the whole crowd crawling (the
   // bottleneck emptied at 0.13 agents a second).
   const float last_pref = std::hypot(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i));
-  const glm::vec2 pref = raw ? wish : followable_velocity(wish, a.at(kAgentHeading, i), last_pref, job.body, job.dt);
+  const glm::vec2 pref = followable_velocity(wish, a.at(kAgentHeading, i), last_pref, job.body, job.dt);
   a.at(kAgentPrefVx, i) = pref.x;
   a.at(kAgentPrefVz, i) = pref.y;
 }

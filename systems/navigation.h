@@ -38,6 +38,7 @@ struct SteeringParameters {
   float slow_radius = 1.5f;     // m: an agent eases its speed down over this distance before a final goal
   float replan_period = 3.0f;   // s between an agent's replans
   float wobble = 0.1f;          // rad: seeded jitter of the wished direction, to break symmetric standoffs
+  float settle_after = 2.0f;    // s without headway after reaching a final goal: it stands where it is
 };
 
 struct SteerJob {
