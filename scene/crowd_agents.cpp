@@ -189,7 +189,9 @@ void run_navigation_stage(Crowd& crowd, float dt) {
     a.plan_rows.clear();
     for (; k < take && a.candidates[k].table == slot; ++k) a.plan_rows.push_back(a.candidates[k].row);
     SoaTable& t = crowd.world.table(crowd.tables[slot]);
-    run_or_throw(make_plan_job(t, *a.query, a.plan_rows, a.goals, a.steering.replan_period), "plan");
+    run_or_throw(make_plan_job(t, *a.query, a.plan_rows, a.goals, sc.ground_min, sc.ground_max,
+                               a.steering.replan_period),
+                 "plan");
   }
   a.last_plans = take;
   a.last_plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

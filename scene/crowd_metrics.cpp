@@ -31,7 +31,9 @@ void CrowdMetrics::observe(const Crowd& crowd, float dt) {
       const bool arrived = (t.u32(kWalkerAgentState, kAgentFlags)[row] & kAgentArrived) != 0u;
       if (arrived && !track.arrived) {
         track.arrived = true;
-        track.time_to_goal = t.f32(kWalkerAgent, kAgentTravelTime)[row];
+        // Seconds since the run began: every agent's first goal is set when it spawns, and an agent with cycling
+        // goals gets its next one (and a fresh travel clock) in the very step it arrives.
+        track.time_to_goal = static_cast<float>(report_.seconds);
       }
       if (!track.arrived && t.f32(kWalkerAgent, kAgentSinceProgress)[row] >= stuck_seconds_) track.stuck = true;
       if (!std::isfinite(x) || !std::isfinite(z)) continue;

@@ -19,7 +19,9 @@ struct CrowdMetricsReport {
   std::uint64_t overlaps = 0;
   double min_clearance_m = 0;  // smallest distance minus the radii seen (negative: an overlap)
   double reached_goal_pct = 0; // agents that reached their goal (their first, for cycling goals)
-  double time_to_goal_mean_s = 0, time_to_goal_p95_s = 0;  // over the agents that reached it
+  // Seconds from the first observed step to an agent's first arrival, over the agents that arrived (observe from
+  // the crowd's first step for times from spawn).
+  double time_to_goal_mean_s = 0, time_to_goal_p95_s = 0;
   std::size_t stuck_agents = 0;  // agents that went stuck_seconds without progress before reaching their goal
   std::uint64_t nan_count = 0;   // non-finite agent values seen
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -199,6 +200,19 @@ bool PlanJob::run() const {
   for (const std::uint32_t i : rows) {
     const glm::vec2 pos(agent.at(kAgentPx, i), agent.at(kAgentPz, i));
     glm::vec2 goal(agent.at(kAgentGoalX, i), agent.at(kAgentGoalZ, i));
+    // A random goal drawn on an obstacle (or in its margin) is drawn again, a few times: snapped to the obstacle's
+    // edge instead, every agent whose point fell on the plaza's fountain queued round its rim.
+    const std::uint32_t group = std::min<std::uint32_t>(state.at(kAgentGroup, i), static_cast<std::uint32_t>(goals.size() - 1));
+    if (goals[group].kind == GoalKind::Random && ground_max.x > ground_min.x && ground_max.y > ground_min.y) {
+      std::uint32_t& rng = state.at(kAgentSeed, i);
+      for (int attempt = 0; attempt < 8; ++attempt) {
+        const std::optional<glm::vec2> on = query->nearest_walkable(goal, 0.05f);
+        if (on && glm::length(*on - goal) < 0.05f) break;
+        goal = random_ground_point(ground_min, ground_max, rng);
+      }
+      agent.at(kAgentGoalX, i) = goal.x;
+      agent.at(kAgentGoalZ, i) = goal.y;
+    }
     const NavPath path = query->find_path(pos, goal, kAgentCorners);
     std::uint32_t& flags = state.at(kAgentFlags, i);
     flags &= ~(kAgentNeedsPath | kAgentPartialPath);
@@ -241,7 +255,8 @@ SteerJob make_steer_job(SoaTable& walkers, std::span<const ScenarioGoal> goals, 
 }
 
 PlanJob make_plan_job(SoaTable& walkers, NavQuery& query, std::span<const std::uint32_t> rows,
-                      std::span<const ScenarioGoal> goals, float replan_period) {
+                      std::span<const ScenarioGoal> goals, glm::vec2 ground_min, glm::vec2 ground_max,
+                      float replan_period) {
   PlanJob job;
   job.query = &query;
   job.agent = f32_view(walkers, kWalkerAgent);
@@ -249,6 +264,8 @@ PlanJob make_plan_job(SoaTable& walkers, NavQuery& query, std::span<const std::u
   job.corners = f32_view(walkers, kWalkerAgentCorners);
   job.rows = rows;
   job.goals = goals;
+  job.ground_min = ground_min;
+  job.ground_max = ground_max;
   job.replan_period = replan_period;
   return job;
 }

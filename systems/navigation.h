@@ -62,6 +62,7 @@ struct PlanJob {
   ColumnView<float> corners;
   std::span<const std::uint32_t> rows;  // rows to plan, in this order
   std::span<const ScenarioGoal> goals;
+  glm::vec2 ground_min{0.0f}, ground_max{0.0f};  // random goals that fall on an obstacle are drawn again here
   float replan_period = 3.0f;
 
   bool validate() const;
@@ -72,7 +73,8 @@ SteerJob make_steer_job(SoaTable& walkers, std::span<const ScenarioGoal> goals, 
                         glm::vec2 ground_max, const SteeringParameters& params, const AgentMoveParameters& body,
                         float dt);
 PlanJob make_plan_job(SoaTable& walkers, NavQuery& query, std::span<const std::uint32_t> rows,
-                      std::span<const ScenarioGoal> goals, float replan_period);
+                      std::span<const ScenarioGoal> goals, glm::vec2 ground_min, glm::vec2 ground_max,
+                      float replan_period);
 
 // Whether agent row i wants a path this step (no path yet, or its replan is due): the frame script's candidates.
 inline bool agent_wants_plan(const ColumnView<const float>& agent, const ColumnView<const std::uint32_t>& state,
