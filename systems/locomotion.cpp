@@ -324,6 +324,18 @@ float agent_cadence(float speed, float height, const GaitStyle& style) {
   return std::clamp(std::max(cadence_for_speed(speed, height), style.agent_min_cadence), kMinCadence, kMaxCadence);
 }
 
+// The pelvis now on `track`, written to the walker's placement: the clock's result whichever track it follows.
+GaitClock finish_clock(const GaitParameters& gp, const GroundTrack& track, ColumnView<float> placement, std::size_t i,
+                       float scale) {
+  const Pose2 pelvis = track.at(0.0f);
+  placement.at(0, i) = pelvis.position.x;
+  placement.at(1, i) = 0.0f;
+  placement.at(2, i) = pelvis.position.z;
+  placement.at(3, i) = pelvis.heading;
+  placement.at(4, i) = scale;
+  return {gp, track, pelvis, scale};
+}
+
 GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source, const GaitRef& g, float& time,
                              ColumnView<float> placement, std::size_t i, float dt, const GaitStyle& style) {
   time += dt;
@@ -354,13 +366,7 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
     g[kGaitDistance] += track.speed * dt;
     track.distance = g[kGaitDistance];
     track.speed_ratio = std::clamp(track.speed / gp.speed, 0.0f, 1.0f);
-    const Pose2 pelvis = track.at(0.0f);
-    placement.at(0, i) = pelvis.position.x;
-    placement.at(1, i) = 0.0f;
-    placement.at(2, i) = pelvis.position.z;
-    placement.at(3, i) = pelvis.heading;
-    placement.at(4, i) = scale;
-    return {gp, track, pelvis, scale};
+    return finish_clock(gp, track, placement, i, scale);
   }
   const CardinalSpline& path = path_of(source.paths, source.path.at(0, i));
   // Speed schedule -> cadence target -> eased cadence. Phase and distance integrate it: no pop on change.
@@ -378,13 +384,7 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
   track.path = &path;
   track.distance = g[kGaitDistance];
   track.speed = gp.speed;
-  const Pose2 pelvis = track.at(0.0f);
-  placement.at(0, i) = pelvis.position.x;
-  placement.at(1, i) = 0.0f;
-  placement.at(2, i) = pelvis.position.z;
-  placement.at(3, i) = pelvis.heading;
-  placement.at(4, i) = scale;
-  return {gp, track, pelvis, scale};
+  return finish_clock(gp, track, placement, i, scale);
 }
 
 // Agents: whether the walker wants to stand, from its velocity and the velocity it would like.
