@@ -77,10 +77,10 @@ struct GroundTrack {
   float speed_ratio = 1.0f;  // agents: |velocity| over the gait's speed at its cadence, in [0, 1]
 
   // The pelvis `ahead` seconds from now (negative: in the past), `extra` metres further along its way.
-  // Agents: along today's velocity (its turns are gentle: navigation's preferred velocity turns at the body's
-  // rate, systems/agent_move.h), no further than its braking distance when it is stopping, the body turning at
-  // turn_rate until it faces its velocity; the swing foot re-aims every frame, so the prediction is never far
-  // from where the foot lands.
+  // Agents: along the agent's course, an arc turning towards its steering target at turn_rate (navigation's wish
+  // turns no faster, systems/agent_move.h) and then a line, no further than its braking distance when it is
+  // stopping; the body turning at turn_rate until it faces where it wants to go. The swing foot re-aims every
+  // frame, so the prediction is never far from where the foot lands.
   Pose2 at(float ahead, float extra = 0.0f) const {
     if (path) return path_pose(*path, distance + speed * ahead + extra);
     const glm::vec2 along = speed > 1e-6f ? velocity / speed : glm::vec2(std::sin(heading), std::cos(heading));

@@ -94,7 +94,7 @@ struct GaitStyle {
   float speed_period = 18.0f;        // seconds per cycle of the speed schedule
 
   // ---- Walkers following steered agents (scenario crowds) ----
-  // How fast the body turns while walking (rad/s; it walks where it faces), ~80 deg/s: a stance lasts ~0.7 s and
+  // How fast the body turns while walking (rad/s; it faces where it wants to go), ~80 deg/s: a stance lasts ~0.7 s and
   // the body turns over a planted foot by at most ~0.5 rad either side of its footprint's heading (2.0 needed
   // 0.7, past what hip, knee and ankle twist). agent_move turns the agent at this rate and the walk predicts
   // footprints with it.
