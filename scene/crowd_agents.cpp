@@ -203,12 +203,11 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
   // Gather in entity order.
   a.rows.clear();
   for_each_agent_table(crowd, [&](SoaTable& t, std::uint32_t slot) {
-    for (std::uint32_t r = 0; r < t.size(); ++r) a.rows.push_back({slot, r});
+    for (std::uint32_t r = 0; r < t.size(); ++r) a.rows.push_back({t.owner(r).index, slot, r});
   });
-  std::sort(a.rows.begin(), a.rows.end(), [&](const CrowdAgents::Row& x, const CrowdAgents::Row& y) {
-    return crowd.world.table(crowd.tables[x.table]).owner(x.row).index <
-           crowd.world.table(crowd.tables[y.table]).owner(y.row).index;
-  });
+  // The entity index is read once per row, not twice per comparison (10,000 agents: ~270,000 comparisons a step).
+  std::sort(a.rows.begin(), a.rows.end(),
+            [](const CrowdAgents::Row& x, const CrowdAgents::Row& y) { return x.walker < y.walker; });
   const std::size_t n = a.rows.size();
   for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz})
     v->resize(n);

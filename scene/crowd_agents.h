@@ -48,6 +48,7 @@ struct CrowdAgents {
   AvoidanceScratch scratch;
   std::vector<float> px, pz, vx, vz, pref_vx, pref_vz, radius, max_speed, new_vx, new_vz;
   struct Row {
+    std::uint32_t walker;  // entity index: the gather's order
     std::uint32_t table, row;
   };
   std::vector<Row> rows;

@@ -12,9 +12,6 @@
 namespace strata {
 namespace {
 
-constexpr float kTwoPi = 6.28318530718f;
-float wrap_angle(float a) { return a - kTwoPi * std::round(a / kTwoPi); }
-
 void move_one(const AgentMoveJob& job, std::size_t i) {
   const ColumnView<float>& a = job.agent;
   const float dt = job.dt;
@@ -97,8 +94,8 @@ bool AgentMoveJob::validate() const {
       !state.fits(n, kAgentInts))
     return false;
   if (agent.overlaps(corners) || agent.overlaps(gait) || agent.overlaps(state)) return false;
-  if (!std::isfinite(dt) || dt < 0.0f || !(params.turn_rate > 0.0f) || !(params.turn_in_place_rate > 0.0f) || !(params.acceleration > 0.0f) ||
-      !(params.braking > 0.0f) || !(params.progress_step > 0.0f))
+  if (!std::isfinite(dt) || dt < 0.0f || !(params.turn_rate > 0.0f) || !(params.turn_in_place_rate > 0.0f) ||
+      !(params.acceleration > 0.0f) || !(params.braking > 0.0f) || !(params.progress_step > 0.0f))
     return false;
   // A non-finite avoidance velocity would move the agent to NaN: refuse it rather than propagate.
   for (std::size_t i = 0; i < n; ++i)

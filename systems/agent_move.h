@@ -13,6 +13,7 @@
 //
 //   reads:  agent (avoidance velocity, preferred velocity, position, heading, goal, corners), gait (idle), dt
 //   writes: agent (position, velocity, heading, best distance, time since progress, travel time)
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -21,6 +22,12 @@
 #include "ecs/column_view.h"
 
 namespace strata {
+
+// `a` wrapped into [-pi, pi] (headings and turns about +Y).
+inline float wrap_angle(float a) {
+  constexpr float kTwoPi = 6.28318530718f;
+  return a - kTwoPi * std::round(a / kTwoPi);
+}
 
 // How fast a body turns at `speed` (m/s): `in_place` standing, rising to `walking` at 1 m/s and above. A planted
 // foot stays planted while the body turns over it, and the hip, knee and ankle twist at most ~1.2 rad between

@@ -56,7 +56,6 @@ Pose2 path_pose(const CardinalSpline& path, float distance) {
   return {path.point_at_length(distance), heading_of(path.tangent_at_length(distance))};
 }
 
-float wrap_angle(float a) { return a - kTwoPi * std::round(a / kTwoPi); }
 
 // Where the pelvis goes: along a path (the stadium lanes: the walker's own distance along a closed spline), or
 // along a steered agent's trajectory (scenario crowds), predicted from its position, velocity and heading. The
