@@ -1,8 +1,10 @@
 // strata: the engine's command-line front end. See docs/commands.md for the commands and their outputs, and the
 // README's "Exit codes" for the contract every subcommand keeps (apps/cli_support.h).
 #include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
 
 #include <algorithm>
+#include <new>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -93,9 +95,21 @@ std::string help_of(const CLI::App& at, const std::string& prefix) {
   return at.get_formatter()->make_help(&at, prefix, CLI::AppFormatMode::Normal);
 }
 
+// Joins TBB's worker threads before main returns. Otherwise they are still alive, or being torn down by TBB's
+// static destructors, while LeakSanitizer's exit-time check runs; its stop-the-world tracer then crashes now and
+// again ("Tracer caught signal 11", google/sanitizers#1353) and turns a passing run into exit 1 (seen once in CI).
+// With the workers joined, the tracer finds fewer threads to stop; outside sanitizer builds it costs one join.
+// A ctest retry of failed tests was the alternative, rejected: it doubles the cost of every real failure and
+// hides a real intermittent one.
+struct JoinTbbWorkersAtExit {
+  tbb::task_scheduler_handle handle{tbb::attach{}};
+  ~JoinTbbWorkersAtExit() { (void)tbb::finalize(handle, std::nothrow); }
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  JoinTbbWorkersAtExit join_tbb_workers;
   CLI::App app{"Strata: animate and render crowds of layered H-Anim humanoids"};
   app.name("strata");
   app.require_subcommand(1);

@@ -1,9 +1,9 @@
 #include "io/image_writer.h"
 
 #include "io/atomic_file.h"
+#include "io/image_encoder_module.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
 
 #include <stdexcept>
 #include <string>
@@ -16,6 +16,39 @@ namespace {
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& reason) {
   throw std::runtime_error("write_image: cannot write '" + path.string() + "': " + reason);
 }
+
+// The encoder module, loaded once per process on the first image (io/image_encoder_module.h says why it is not
+// linked in). It is looked for beside libstrata, found through dladdr on this function, which holds in the build
+// tree and in an install alike; then by name, through the loader's search path. It is never unloaded.
+struct EncoderModule {
+  StrataEncodeImageFn encode = nullptr;
+  std::string error;  // why it could not be loaded, when encode is null
+};
+
+const EncoderModule& encoder_module() {
+  static const EncoderModule module = [] {
+    EncoderModule m;
+    std::vector<std::string> candidates;
+    Dl_info self{};
+    if (dladdr(reinterpret_cast<void*>(&encoder_module), &self) != 0 && self.dli_fname != nullptr)
+      candidates.push_back((std::filesystem::path(self.dli_fname).parent_path() / STRATA_IMAGE_MODULE_FILE).string());
+    candidates.emplace_back(STRATA_IMAGE_MODULE_FILE);
+    for (const std::string& candidate : candidates) {
+      void* handle = dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (handle == nullptr) {
+        const char* reason = dlerror();
+        m.error += (m.error.empty() ? "" : "; ") + std::string(reason != nullptr ? reason : candidate);
+        continue;
+      }
+      m.encode = reinterpret_cast<StrataEncodeImageFn>(dlsym(handle, STRATA_IMAGE_ENCODE_SYMBOL));
+      if (m.encode != nullptr) break;
+      m.error += "; " + candidate + " has no " STRATA_IMAGE_ENCODE_SYMBOL;
+    }
+    return m;
+  }();
+  return module;
+}
+
 }  // namespace
 
 void write_image(const std::filesystem::path& path, int width, int height, int channels,
@@ -37,22 +70,12 @@ void write_image(const std::filesystem::path& path, int width, int height, int c
   // Encoded into memory, then written through write_file_atomically (io/atomic_file.h): a temporary sibling
   // renamed into place only when complete. Letting OpenImageIO write the file itself was rejected: its PNG writer
   // ignores a failing write (a full disk, a file-size limit) and reports success over a truncated frame.
-  auto out = OIIO::ImageOutput::create(path.string());
-  if (!out) fail(path, "no image format for this file name (" + OIIO::geterror() + ")");
-  if (!out->supports("ioproxy")) fail(path, "the image format cannot be encoded in memory");
+  const EncoderModule& module = encoder_module();
+  if (module.encode == nullptr) fail(path, "the image encoder module could not be loaded (" + module.error + ")");
   std::vector<unsigned char> encoded;
-  OIIO::Filesystem::IOVecOutput memory(encoded);
-  OIIO::Filesystem::IOProxy* proxy = &memory;
-
-  OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
-  // Level 1 instead of the default 6: about 3x faster to encode for a modest size cost (notes, section 1).
-  spec.attribute("png:compressionLevel", 1);
-  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-  if (!out->open(path.string(), spec)) fail(path, out->geterror());
-  const bool written = out->write_image(OIIO::TypeDesc::UINT8, pixels.data());
-  const std::string write_error = written ? std::string{} : out->geterror();
-  const bool closed = out->close();
-  if (!written || !closed) fail(path, written ? out->geterror() : write_error);
+  std::string error;
+  if (!module.encode(path.string().c_str(), width, height, channels, pixels.data(), &encoded, &error))
+    fail(path, error);
   try {
     write_file_atomically(path, {reinterpret_cast<const char*>(encoded.data()), encoded.size()});
   } catch (const std::exception& e) {
