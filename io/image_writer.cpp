@@ -42,7 +42,7 @@ const EncoderModule& encoder_module() {
       }
       m.encode = reinterpret_cast<StrataEncodeImageFn>(dlsym(handle, STRATA_IMAGE_ENCODE_SYMBOL));
       if (m.encode != nullptr) break;
-      m.error += "; " + candidate + " has no " STRATA_IMAGE_ENCODE_SYMBOL;
+      m.error += (m.error.empty() ? "" : "; ") + candidate + " has no " STRATA_IMAGE_ENCODE_SYMBOL;
     }
     return m;
   }();
