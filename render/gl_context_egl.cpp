@@ -6,7 +6,7 @@
 // DISPLAY set it ties a "headless" context to the X server.
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(STRATA_ASAN)
 #include <dlfcn.h>
 #include <link.h>
 #endif
@@ -82,7 +82,7 @@ DisplayRegistry& display_registry() {
   return registry;
 }
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(STRATA_ASAN)
 // AddressSanitizer builds only (scripts/strata.sh sanitize): Mesa keeps a few driver allocations for the life of
 // the process, and eglTerminate/exit dlclose the driver before LeakSanitizer runs, so its report shows
 // "<unknown module>" frames that no suppression can name. Marking the already-loaded driver objects

@@ -133,7 +133,10 @@ CorCentres compute_cor_centres(const Mesh& mesh, const SkinBinding& binding, con
           static_cast<std::uint32_t>(v));
   const double inv_sigma2 = 1.0 / (options.sigma * options.sigma);
   std::vector<std::uint8_t> solved(n, 0);
-  for (const auto& [joints, vertices] : sets) {
+  // Named references, not a structured binding: clang before 16 cannot capture a binding in the lambda below.
+  for (const auto& set : sets) {
+    const std::vector<std::int16_t>& joints = set.first;
+    const std::vector<std::uint32_t>& vertices = set.second;
     std::vector<std::uint32_t> candidates;
     for (std::size_t a = 0; a < joints.size(); ++a)
       for (std::size_t b = a + 1; b < joints.size(); ++b) {

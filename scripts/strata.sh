@@ -5,7 +5,7 @@
 #   bash scripts/strata.sh build                          install what is missing, build
 #   bash scripts/strata.sh validate-gltf                  export the walker at every body level and run the Khronos
 #                                                         glTF validator on the files (fails on any error)
-#   bash scripts/strata.sh sanitize [ctest args]          build in build-asan with ASan+UBSan, run every test
+#   bash scripts/strata.sh sanitize [ctest args]          build in build-asan with ASan+UBSan (clang 14), run every test
 #   bash scripts/strata.sh fuzz [SECONDS [TARGET...]]     build the libFuzzer targets in build-fuzz (clang 14),
 #                                                         run each for SECONDS (default 20) on its seed corpus
 # Environment: BUILD_DIR (default build), JOBS (default: all cores).
@@ -72,14 +72,16 @@ validate_gltf() {
   node "$ROOT/scripts/validate_gltf.js" "$prefix" "${files[@]}"
 }
 
-# ASan + UBSan over the whole suite (docs/reliability.md). -O1 keeps the build and the tests quick; asserts stay
-# on. Leaks are detected; scripts/lsan.supp silences leaks inside system libraries only (Mesa, EGL, X).
+# ASan + UBSan over the whole suite (docs/reliability.md), built with clang 14: it compiles this instrumented
+# build in about half GCC's time (measured: 13 s against 25 s for apps/cmd_view.cpp at -O1) and its UBSan checks
+# more (pointer overflow, function-pointer types). -O1 keeps the build and the tests quick; asserts stay on. Leaks
+# are detected; scripts/lsan.supp silences leaks inside system libraries only (Mesa, EGL, X).
 sanitize() {
   local dir="${ASAN_BUILD_DIR:-$ROOT/build-asan}"
   export ASAN_OPTIONS="halt_on_error=1:abort_on_error=0:detect_leaks=1:detect_stack_use_after_return=0:strict_string_checks=1"
   export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
   export LSAN_OPTIONS="suppressions=$ROOT/scripts/lsan.supp:print_suppressions=0"
-  cmake -S "$ROOT" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O1 -g1" \
+  CXX=clang++-14 cmake -S "$ROOT" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O1 -g1" \
         -DSTRATA_SANITIZE=address,undefined -DSTRATA_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build "$dir" -j "$JOBS"
   cd "$dir"
@@ -145,6 +147,7 @@ case "$cmd" in
     validate_gltf
     ;;
   sanitize)
+    PACKAGES+=(clang-14)
     install_missing
     sanitize "$@"
     ;;

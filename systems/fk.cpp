@@ -37,7 +37,9 @@ void fk_joint(const float* const q[4], const float* const parent_or_root[kAffine
   const float* __restrict qw = q[3];
   // Distinct joints' columns never overlap (they are different components of one field), but the compiler
   // cannot see that through 40 pointers; ivdep says so and lets it vectorise without runtime alias checks.
+#if !defined(__clang__)  // clang has no ivdep; its own hint warns at -O1, where it does not vectorise anyway
 #pragma GCC ivdep
+#endif
   for (std::size_t i = first; i < last; ++i) {
     const float x = qx[i], y = qy[i], z = qz[i], w = qw[i];
     // s = 2/|q|^2 accepts unnormalised quaternions. The 1e-30 keeps the zero quaternion finite (every product

@@ -71,6 +71,26 @@ void steer_one(const SteerJob& job, std::size_t i) {
     c.at(1, i) = pos.y;
     c.at(kAgentCorners * 2, i) = 1.0f;
   }
+  // An agent bound for a region that makes no headway outside it takes another point of the region, every
+  // settle_after seconds while that lasts: the point it drew may be where an earlier agent settled (seen: the
+  // bottleneck's last walker pressing for ever against one who had stopped just inside the region, a metre from
+  // free floor). Since-progress is not reset, so an agent that still gets nowhere is reported stuck. Rejected:
+  // counting "near an occupied point" as arrival, which would let an agent that never entered the region
+  // arrive.
+  if (spec.kind == GoalKind::Region && (job.state.at(kAgentFlags, i) & kAgentArrived) == 0u &&
+      job.params.settle_after > 0.0f) {
+    const float since = a.at(kAgentSinceProgress, i);
+    if (since > job.params.settle_after &&
+        std::floor(since / job.params.settle_after) != std::floor((since - job.dt) / job.params.settle_after)) {
+      std::uint32_t& rng = job.state.at(kAgentSeed, i);
+      goal = random_in(spec.region_min, spec.region_max, rng);
+      a.at(kAgentGoalX, i) = goal.x;
+      a.at(kAgentGoalZ, i) = goal.y;
+      a.at(kAgentBestDistance, i) = glm::length(goal - pos);
+      c.at(kAgentCorners * 2, i) = 0.0f;
+      job.state.at(kAgentFlags, i) |= kAgentNeedsPath;
+    }
+  }
   // Arrival, and the next goal where the group has one.
   if (glm::length(goal - pos) < a.at(kAgentGoalRadius, i)) {
     job.state.at(kAgentFlags, i) |= kAgentArrived;

@@ -23,25 +23,32 @@ struct MuscleInput {
 // d = c0 f[p0] + c1 f[p1] + c2 f[p2] (three gathers from the walker's few hundred bytes of force factors, which
 // stay in L1), fused here so positions are written once; a separate displacement pass would read and write the
 // whole output again.
+// A column's row `first`, or null for a column this layout does not fill (no muscles, fewer influences):
+// `data() + first` on an empty column is arithmetic on a null pointer, undefined even when never dereferenced.
+template <class Column>
+[[gnu::always_inline]] inline auto column_at(const Column& column, std::uint32_t first) -> decltype(column.data()) {
+  return column.data() == nullptr ? nullptr : column.data() + first;
+}
+
 template <int K, bool Muscle, bool Rigid = false>
 [[gnu::always_inline]] inline void skin_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count, const float (*m)[12],
                 const float* __restrict force, float* __restrict ox, float* __restrict oy, float* __restrict oz,
                 float* __restrict onx, float* __restrict ony, float* __restrict onz, float normal_scale = 1.0f) {
-  const float* __restrict px = L.px.data() + first;
-  const float* __restrict py = L.py.data() + first;
-  const float* __restrict pz = L.pz.data() + first;
-  const float* __restrict nx = L.nx.data() + first;
-  const float* __restrict ny = L.ny.data() + first;
-  const float* __restrict nz = L.nz.data() + first;
-  const float* __restrict w1 = L.weight[1].data() + first;
-  const float* __restrict w2 = L.weight[2].data() + first;
-  const float* __restrict w3 = L.weight[3].data() + first;
-  const std::int32_t* __restrict p0 = L.muscle_point[0].data() + first;
-  const std::int32_t* __restrict p1 = L.muscle_point[1].data() + first;
-  const std::int32_t* __restrict p2 = L.muscle_point[2].data() + first;
-  const float* __restrict c0 = L.muscle_coefficient[0].data() + first;
-  const float* __restrict c1 = L.muscle_coefficient[1].data() + first;
-  const float* __restrict c2 = L.muscle_coefficient[2].data() + first;
+  const float* __restrict px = column_at(L.px, first);
+  const float* __restrict py = column_at(L.py, first);
+  const float* __restrict pz = column_at(L.pz, first);
+  const float* __restrict nx = column_at(L.nx, first);
+  const float* __restrict ny = column_at(L.ny, first);
+  const float* __restrict nz = column_at(L.nz, first);
+  const float* __restrict w1 = column_at(L.weight[1], first);
+  const float* __restrict w2 = column_at(L.weight[2], first);
+  const float* __restrict w3 = column_at(L.weight[3], first);
+  const std::int32_t* __restrict p0 = column_at(L.muscle_point[0], first);
+  const std::int32_t* __restrict p1 = column_at(L.muscle_point[1], first);
+  const std::int32_t* __restrict p2 = column_at(L.muscle_point[2], first);
+  const float* __restrict c0 = column_at(L.muscle_coefficient[0], first);
+  const float* __restrict c1 = column_at(L.muscle_coefficient[1], first);
+  const float* __restrict c2 = column_at(L.muscle_coefficient[2], first);
   // A local copy: the compiler cannot prove the outputs never alias `m`, and would reload it every vertex.
   // Weights sum to 1 (the layout renormalised them), so sum_k w_k M_k = M_0 + sum_{k>0} w_k (M_k - M_0): one
   // multiply-add per influence beyond the first instead of a multiply per influence, and w_0 is never read (4
@@ -128,21 +135,21 @@ template <int K, bool Muscle>
                                              const float (*d)[8], float scale, const float* __restrict force,
                                              float* __restrict ox, float* __restrict oy, float* __restrict oz,
                                              float* __restrict onx, float* __restrict ony, float* __restrict onz) {
-  const float* __restrict px = L.px.data() + first;
-  const float* __restrict py = L.py.data() + first;
-  const float* __restrict pz = L.pz.data() + first;
-  const float* __restrict nx = L.nx.data() + first;
-  const float* __restrict ny = L.ny.data() + first;
-  const float* __restrict nz = L.nz.data() + first;
-  const float* __restrict w1 = L.weight[1].data() + first;
-  const float* __restrict w2 = L.weight[2].data() + first;
-  const float* __restrict w3 = L.weight[3].data() + first;
-  const std::int32_t* __restrict p0 = L.muscle_point[0].data() + first;
-  const std::int32_t* __restrict p1 = L.muscle_point[1].data() + first;
-  const std::int32_t* __restrict p2 = L.muscle_point[2].data() + first;
-  const float* __restrict c0 = L.muscle_coefficient[0].data() + first;
-  const float* __restrict c1 = L.muscle_coefficient[1].data() + first;
-  const float* __restrict c2 = L.muscle_coefficient[2].data() + first;
+  const float* __restrict px = column_at(L.px, first);
+  const float* __restrict py = column_at(L.py, first);
+  const float* __restrict pz = column_at(L.pz, first);
+  const float* __restrict nx = column_at(L.nx, first);
+  const float* __restrict ny = column_at(L.ny, first);
+  const float* __restrict nz = column_at(L.nz, first);
+  const float* __restrict w1 = column_at(L.weight[1], first);
+  const float* __restrict w2 = column_at(L.weight[2], first);
+  const float* __restrict w3 = column_at(L.weight[3], first);
+  const std::int32_t* __restrict p0 = column_at(L.muscle_point[0], first);
+  const std::int32_t* __restrict p1 = column_at(L.muscle_point[1], first);
+  const std::int32_t* __restrict p2 = column_at(L.muscle_point[2], first);
+  const float* __restrict c0 = column_at(L.muscle_coefficient[0], first);
+  const float* __restrict c1 = column_at(L.muscle_coefficient[1], first);
+  const float* __restrict c2 = column_at(L.muscle_coefficient[2], first);
   float D[K][8];  // differences from the first, as in skin_group
   for (int k = 0; k < K; ++k)
     for (int c = 0; c < 8; ++c) D[k][c] = k == 0 ? d[0][c] : d[k][c] - d[0][c];
@@ -199,24 +206,24 @@ template <int K, bool Muscle>
                                              const float* __restrict force, float* __restrict ox,
                                              float* __restrict oy, float* __restrict oz, float* __restrict onx,
                                              float* __restrict ony, float* __restrict onz) {
-  const float* __restrict px = L.px.data() + first;
-  const float* __restrict py = L.py.data() + first;
-  const float* __restrict pz = L.pz.data() + first;
-  const float* __restrict nx = L.nx.data() + first;
-  const float* __restrict ny = L.ny.data() + first;
-  const float* __restrict nz = L.nz.data() + first;
-  const float* __restrict cxs = L.cx.data() + first;
-  const float* __restrict cys = L.cy.data() + first;
-  const float* __restrict czs = L.cz.data() + first;
-  const float* __restrict w1 = L.weight[1].data() + first;
-  const float* __restrict w2 = L.weight[2].data() + first;
-  const float* __restrict w3 = L.weight[3].data() + first;
-  const std::int32_t* __restrict p0 = L.muscle_point[0].data() + first;
-  const std::int32_t* __restrict p1 = L.muscle_point[1].data() + first;
-  const std::int32_t* __restrict p2 = L.muscle_point[2].data() + first;
-  const float* __restrict c0 = L.muscle_coefficient[0].data() + first;
-  const float* __restrict c1 = L.muscle_coefficient[1].data() + first;
-  const float* __restrict c2 = L.muscle_coefficient[2].data() + first;
+  const float* __restrict px = column_at(L.px, first);
+  const float* __restrict py = column_at(L.py, first);
+  const float* __restrict pz = column_at(L.pz, first);
+  const float* __restrict nx = column_at(L.nx, first);
+  const float* __restrict ny = column_at(L.ny, first);
+  const float* __restrict nz = column_at(L.nz, first);
+  const float* __restrict cxs = column_at(L.cx, first);
+  const float* __restrict cys = column_at(L.cy, first);
+  const float* __restrict czs = column_at(L.cz, first);
+  const float* __restrict w1 = column_at(L.weight[1], first);
+  const float* __restrict w2 = column_at(L.weight[2], first);
+  const float* __restrict w3 = column_at(L.weight[3], first);
+  const std::int32_t* __restrict p0 = column_at(L.muscle_point[0], first);
+  const std::int32_t* __restrict p1 = column_at(L.muscle_point[1], first);
+  const std::int32_t* __restrict p2 = column_at(L.muscle_point[2], first);
+  const float* __restrict c0 = column_at(L.muscle_coefficient[0], first);
+  const float* __restrict c1 = column_at(L.muscle_coefficient[1], first);
+  const float* __restrict c2 = column_at(L.muscle_coefficient[2], first);
   float M[K][12], Q[K][4];  // differences from the first, as in skin_group
   for (int k = 0; k < K; ++k) {
     for (int c = 0; c < 12; ++c) M[k][c] = k == 0 ? m[0][c] : m[k][c] - m[0][c];
@@ -350,10 +357,15 @@ template <bool Muscle>
   }
 }
 
-[[gnu::target("arch=x86-64-v4,prefer-vector-width=512")]] void skin_groups_avx512(const SkinLayout& L,
-                                                                                   const WalkerPose& p, float* ox,
-                                                                                   float* oy, float* oz, float* onx,
-                                                                                   float* ony, float* onz) {
+// GCC needs prefer-vector-width=512 in the attribute or it keeps 256-bit vectors on x86-64-v4; clang's target
+// attribute rejects that key and would then drop the whole attribute (its preference is a command-line flag only).
+#if defined(__clang__)
+#define STRATA_TARGET_AVX512 gnu::target("arch=x86-64-v4")
+#else
+#define STRATA_TARGET_AVX512 gnu::target("arch=x86-64-v4,prefer-vector-width=512")
+#endif
+[[STRATA_TARGET_AVX512]] void skin_groups_avx512(const SkinLayout& L, const WalkerPose& p, float* ox, float* oy,
+                                                 float* oz, float* onx, float* ony, float* onz) {
   skin_groups(L, p, ox, oy, oz, onx, ony, onz);
 }
 

@@ -17,7 +17,7 @@
 
 namespace strata {
 
-class Crowd;
+struct Crowd;
 class Profiler;
 
 // The last `capacity` frames of every profiled system's time (ms), for the chart. Fed once per frame after

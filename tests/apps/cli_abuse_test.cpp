@@ -339,7 +339,9 @@ TEST_P(CliAbuse, ExitCodeMessageAndFiles) {
   ASSERT_FALSE(o.timed_out) << "hung (killed after 60 s); output: " << o.output;
   ASSERT_NE(o.code, -1) << "killed by a signal; output: " << o.output;
   EXPECT_EQ(o.code, c.exit_code) << o.output;
-  if (!c.message.empty()) EXPECT_NE(o.output.find(c.message), std::string::npos) << "no '" << c.message << "' in: " << o.output;
+  if (!c.message.empty()) {
+    EXPECT_NE(o.output.find(c.message), std::string::npos) << "no '" << c.message << "' in: " << o.output;
+  }
   if (c.exit_code != 0) {
     // A failure is one line on stderr, prefixed with the command.
     EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << "not one line: " << o.err;

@@ -84,7 +84,7 @@ TEST(Determinism, SkinHashIsTheSameForOneAndTwoThreadsAndMatchesTheGoldenValue) 
   std::printf("hash 0x%016llx\n", static_cast<unsigned long long>(one));
   EXPECT_EQ(one, two) << "thread count changes the skin output";
   if (skin_kernel_isa() != SkinKernelIsa::Avx2Fma) GTEST_SKIP() << "golden value pinned for the AVX2+FMA body";
-#if defined(__SANITIZE_ADDRESS__) || !defined(NDEBUG)
+#if defined(STRATA_ASAN) || !defined(NDEBUG)
   // A sanitizer or debug build optimises the fast-math kernel differently (other contractions and orders), so
   // only the Release build reproduces the pinned rounding; the thread-count comparison above still holds.
   GTEST_SKIP() << "golden value pinned for the Release build";
