@@ -13,6 +13,7 @@
 #include "scene/input_formats.h"
 #include "scene/scene_setup.h"
 #include "io/bvh.h"
+#include "motion/bvh_naming.h"
 #include "io/hanim_loader.h"
 #include "io/obj.h"
 
@@ -27,6 +28,23 @@ int run_other_info(const std::string& path, InputFormatId format) {
       std::cout << "file:       " << path << "\nformat:     BVH motion capture\njoints:     " << m.joint_count()
                 << " (+" << m.end_site_count() << " end sites), " << m.channel_count << " channels\nframes:     "
                 << m.frame_count << " at " << m.frame_time << " s (" << m.duration() << " s)\n";
+      // The naming family and the map a retarget would use; a capture that is not a known humanoid still gets
+      // its summary above, and the reason instead of a map.
+      try {
+        const BvhNaming n = recognise_bvh_naming(m);
+        std::cout << "family:     " << n.family << "\nunits:      " << n.units;
+        if (n.metres_per_unit > 0.0f) std::cout << "\njoint_height_m: " << n.stature * n.metres_per_unit;
+        std::cout << "\nmap:        BVH joint -> H-Anim joint (aimed at)\n";
+        for (const RetargetMapping& row : n.map) {
+          std::cout << "  " << row.bvh << " -> " << row.hanim;
+          if (!row.hanim_aim.empty())
+            std::cout << " (" << (row.bvh_aim.empty() ? std::string("end") : row.bvh_aim) << " / " << row.hanim_aim
+                      << ")";
+          std::cout << "\n";
+        }
+      } catch (const std::invalid_argument& e) {
+        std::cout << "family:     none (" << e.what() << ")\n";
+      }
     } else if (format == InputFormatId::Obj) {
       const Mesh m = load_obj_file(path);
       std::cout << "file:       " << path << "\nformat:     Wavefront OBJ\nvertices:   " << m.vertex_count()

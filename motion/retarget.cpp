@@ -7,6 +7,8 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "motion/bvh_naming.h"
+
 namespace strata {
 namespace {
 
@@ -72,15 +74,16 @@ SolePoints sole_points(const Skeleton& s, std::int32_t ankle, char side) {
 
 }  // namespace
 
-// The map, Poser (CMU Daz conversion) -> H-Anim 1.1, 25-joint skeleton:
+// The map built for a Poser file (the CMU Daz conversion) by motion/bvh_naming.cpp, onto the 25-joint H-Anim
+// skeleton; the other families map the same joints under their own names:
 //
 //   BVH       H-Anim               bone direction (BVH / H-Anim)        notes
 //   hip       HumanoidRoot         - / -                                rotation; position via the hip midpoint
-//   abdomen   vl5                  abdomen->chest / vl5->vt6
-//   chest     vt6                  chest->neck / vt6->vc4               vt1 unmapped: rides on vt6 (the Poser chest
+//   abdomen   vl5                  - / -                                spine, neck and head: rest-relative (below)
+//   chest     vt6                  - / -                                vt1 unmapped: rides on vt6 (the Poser chest
 //                                                                       is one segment up to the neck)
-//   neck      vc4                  neck->head / vc4->skullbase
-//   head      skullbase            - / -                                both upright at rest
+//   neck      vc4                  - / -
+//   head      skullbase            - / -
 //   lCollar   l_sternoclavicular   lCollar->lShldr / l_sternoclavicular->l_shoulder (acromioclavicular unmapped)
 //   lShldr    l_shoulder           lShldr->lForeArm / l_shoulder->l_elbow    the T-pose compensation is here
 //   lForeArm  l_elbow              lForeArm->lHand / l_elbow->l_wrist
@@ -93,30 +96,14 @@ SolePoints sole_points(const Skeleton& s, std::int32_t ankle, char side) {
 // Unmapped H-Anim joints: sacroiliac (the Poser hip is the pelvis: it drives HumanoidRoot, and the thighs hang from
 // it), vt1, the acromioclavicular joints, and the midtarsals without toes. Unmapped BVH joints: the Buttocks (folded
 // into the thighs), eyes and fingers (dropped: the 25-joint skeleton has no fingers).
+// Spine, neck and head take the capture's rotations relative to its rest unchanged (identity alignment), unlike the
+// limbs: both rest poses stand upright with the gaze level, and their spine bones point differently only because
+// the joints sit differently (H-Anim's vt6 -> vc4 leans 22 deg forward along the thoracic curve, the Poser
+// chest -> neck 6 deg back). Aiming the bones at each other turned that convention into posture: the chest leant
+// 27 deg and the neck 20 deg back, and the walker looked at the sky. The limbs keep the bone alignment, which is
+// where the rest poses really differ (T-pose arms against arms down).
 // The abdomen -> vl5 choice over a sacroiliac/vl5 split: the Poser abdomen bends the spine above the pelvis, which
 // is vl5's job; splitting it would invent a pelvis tilt the capture never recorded.
-std::vector<RetargetMapping> poser_to_hanim_map() {
-  std::vector<RetargetMapping> map = {
-      {"hip", "HumanoidRoot", "", ""},
-      {"abdomen", "vl5", "chest", "vt6"},
-      {"chest", "vt6", "neck", "vc4"},
-      {"neck", "vc4", "head", "skullbase"},
-      {"head", "skullbase", "", ""},
-  };
-  for (char side : {'l', 'r'}) {
-    const std::string p(1, side);
-    map.push_back({p + "Collar", p + "_sternoclavicular", p + "Shldr", p + "_shoulder"});
-    map.push_back({p + "Shldr", p + "_shoulder", p + "ForeArm", p + "_elbow"});
-    map.push_back({p + "ForeArm", p + "_elbow", p + "Hand", p + "_wrist"});
-    map.push_back({p + "Hand", p + "_wrist", p + "Mid1", p + "_hand_tip"});
-    map.push_back({p + "Thigh", p + "_hip", p + "Shin", p + "_knee"});
-    map.push_back({p + "Shin", p + "_knee", p + "Foot", p + "_ankle"});
-    map.push_back({p + "Foot", p + "_ankle", "", p + "_forefoot_tip"});
-    map.push_back({p + "Toe", p + "_midtarsal", "", p + "_forefoot_tip", false});
-  }
-  return map;
-}
-
 int FootContacts::stance_at(int leg, float t) const {
   const auto& intervals = legs[static_cast<std::size_t>(leg)];
   for (std::size_t i = 0; i < intervals.size(); ++i)
@@ -144,12 +131,26 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
     throw std::invalid_argument("retarget: " + motion.source + " has " + std::to_string(motion.frame_count) +
                                 " frames; at least 2 after skipping " + std::to_string(skip) + " are needed");
   const std::size_t hj = skeleton.joint_count();
-  const std::vector<glm::vec3> bvh_rest = motion.rest_positions();
+  // The map: recognised from the names (and the file's axes with it) unless the caller gave one.
+  BvhNaming naming;
+  glm::mat3 axes(1.0f);
+  if (options.map.empty()) {
+    naming = recognise_bvh_naming(motion);
+    axes = naming.axes;
+  }
+  const std::vector<RetargetMapping>& map = options.map.empty() ? naming.map : options.map;
+  // A file whose axes are not H-Anim's is turned as it is read: rest positions, End Sites, every frame's global
+  // rotations (conjugated) and positions. Skipped when they agree, so such files keep their exact values.
+  const bool turn = axes != glm::mat3(1.0f);
+  const glm::quat turn_q = glm::quat_cast(axes);
+  std::vector<glm::vec3> bvh_rest = motion.rest_positions();
+  if (turn)
+    for (glm::vec3& p : bvh_rest) p = axes * p;
 
   // Resolve the map and each row's alignment rotation once.
   std::vector<ResolvedRow> row_of(hj);
   std::vector<std::int32_t> bvh_of(hj, -1);
-  for (const RetargetMapping& m : options.map) {
+  for (const RetargetMapping& m : map) {
     const std::int32_t b = motion.find_joint(m.bvh);
     const std::int32_t h = skeleton.find_joint(m.hanim);
     if (b < 0 || h < 0) {
@@ -164,9 +165,16 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
     if (!m.hanim_aim.empty()) {
       glm::vec3 bvh_dir;
       if (m.bvh_aim.empty()) {
-        if (!motion.joints[b].has_end_site)
-          throw std::invalid_argument("retarget: BVH joint '" + m.bvh + "' has no End Site to aim at");
-        bvh_dir = motion.joints[b].end_site;
+        // Its End Site, else its first child joint (a foot that goes on to a toe, a hand to its fingers).
+        std::int32_t child = -1;
+        for (std::size_t c = static_cast<std::size_t>(b) + 1; c < motion.joint_count() && child < 0; ++c)
+          if (motion.joints[c].parent == b) child = static_cast<std::int32_t>(c);
+        if (motion.joints[b].has_end_site)
+          bvh_dir = axes * motion.joints[b].end_site;
+        else if (child >= 0)
+          bvh_dir = bvh_rest[child] - bvh_rest[b];
+        else
+          throw std::invalid_argument("retarget: BVH joint '" + m.bvh + "' has no End Site or child to aim at");
       } else {
         const std::int32_t aim = motion.find_joint(m.bvh_aim);
         if (aim < 0) throw std::invalid_argument("retarget: " + motion.source + " has no joint '" + m.bvh_aim + "'");
@@ -202,6 +210,10 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
   std::vector<glm::vec3> bvh_pos(motion.joint_count()), pos(hj);
   for (std::size_t k = 0; k < frames; ++k) {
     motion.pose(k + skip, bvh_rot, bvh_pos);
+    if (turn) {
+      for (glm::quat& q : bvh_rot) q = turn_q * q * glm::conjugate(turn_q);
+      for (glm::vec3& p : bvh_pos) p = axes * p;
+    }
     for (std::size_t h = 0; h < hj; ++h) {
       const std::int32_t p = skeleton.parents[h];
       const glm::quat parent = p < 0 ? glm::quat(1, 0, 0, 0) : hanim_global[p];
@@ -276,6 +288,7 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
   result.ground_offset = ground_offset;
   result.floor_slope = floor_b;
   result.skipped_frames = static_cast<int>(skip);
+  result.family = naming.family;
   const float dt = motion.frame_time;
   AnimationClip& clip = result.clip;
   clip.name = motion.source.empty() ? std::string("mocap") : motion.source;

@@ -29,8 +29,9 @@
 namespace strata {
 
 // One row of the name map. `hanim_aim` / `bvh_aim` name the child whose direction defines the bone (a joint or,
-// for H-Anim, a site; an empty bvh_aim means the BVH joint's End Site). Both empty: no alignment (identity), used
-// for the root and the head, whose rest frames already agree.
+// for H-Anim, a site; an empty bvh_aim means the BVH joint's End Site). Both empty: no alignment (identity), the
+// capture's rotation relative to its rest passed on as is; used for the root, spine, neck and head, which stand
+// upright in both rest poses (retarget.cpp says why aiming their bones was wrong).
 struct RetargetMapping {
   std::string bvh;
   std::string hanim;
@@ -39,11 +40,10 @@ struct RetargetMapping {
   bool required = true;  // false: skipped when the BVH lacks the joint (e.g. toes, which many exports omit)
 };
 
-// The Poser/Daz vocabulary of the CMU BVH conversions onto the 25-joint H-Anim skeleton (see retarget.cpp).
-std::vector<RetargetMapping> poser_to_hanim_map();
-
 struct RetargetOptions {
-  std::vector<RetargetMapping> map = poser_to_hanim_map();
+  // Empty: recognised from the file's joint names (motion/bvh_naming.h: Poser/DAZ, CMU, Mixamo, HumanIK), with
+  // the file's axes turned to H-Anim's. Given: used as is, the file's axes taken to be H-Anim's already.
+  std::vector<RetargetMapping> map;
   // Leading frames dropped. The CMU/Daz files start in the zero-rotation T-pose and ramp into the walk over frames
   // 0-4 (left shoulder Z: 0, -23, -46, -66, -79, -84 deg on frames 0..5, then it turns back): frame 5 is the first
   // walking frame. A fixed count rather than a detector: a detector needs a "walking" threshold that would be just
@@ -83,13 +83,14 @@ struct RetargetResult {
   float ground_offset = 0.0f;   // metres added to the root height at z = 0 to put the feet on y = 0
   float floor_slope = 0.0f;     // dy/dz of the capture's floor that was levelled out (see retarget.cpp)
   int skipped_frames = 0;
+  std::string family;           // the naming family recognised ("" with an explicit map)
   std::vector<std::string> unmapped_hanim;  // H-Anim joints that got no track (identity local rotation)
   // Total horizontal root travel over the clip (last key - first key), metres.
   glm::vec3 root_travel{0.0f};
 };
 
 // Retargets `motion` onto `skeleton`. Throws std::invalid_argument when a map row names a joint missing in either
-// (after the BVH's optional joints, see poser_to_hanim_map) or the motion has too few frames.
+// (after the BVH's optional joints), the names match no known family, or the motion has too few frames.
 RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, const RetargetOptions& options = {});
 
 // Scalar FK of one pose: global rotations and joint positions in humanoid space (rest centres moved by the

@@ -135,7 +135,8 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
     config.motion = MotionSource::Clip;
   } else if (std::filesystem::path(o.motion).has_extension()) {
     require_input(o.motion, kGivesMotion, "--motion");
-    // Motion capture: retargeted onto this skeleton by the Poser -> H-Anim map, feet locked by IK in stance.
+    // Motion capture: its naming family recognised (motion/bvh_naming.h) and retargeted onto this skeleton, feet
+    // locked by IK in stance.
     set_mocap(*scene, retarget_bvh(load_bvh_file(o.motion), scene->rig().skeleton));
     config.motion = MotionSource::Mocap;
   } else {

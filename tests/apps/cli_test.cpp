@@ -58,6 +58,8 @@ TEST(StrataInfo, SummarisesMeshesBodiesAndMotionCapture) {
   if (!fs::exists(data / "cmu_mocap_bvh")) GTEST_SKIP() << "no shared data";
   const std::pair<fs::path, const char*> cases[] = {
       {data / "cmu_mocap_bvh" / "02_02_daz.bvh", "frames:     299"},
+      {data / "cmu_mocap_bvh" / "02_02_daz.bvh", "family:     Poser/DAZ\nunits:      centimetres"},
+      {data / "cmu_mocap_bvh" / "02_02_daz.bvh", "  lThigh -> l_hip (lShin / l_knee)\n"},
       {data / "gltf_khronos_samples" / "CesiumMan.glb", "vertices:   3273"},
       {data / "makehuman_hm08", "joints:     25"},
       {data / "makehuman_hm08" / "base.obj", "vertices:   19158"}};
