@@ -204,6 +204,7 @@ void add_report_command(CLI::App& app, int& exit_code) {
   add_subdiv_report(*report, exit_code);
   add_lod_report(*report, exit_code);
   add_crowd_report(*report, exit_code);
+  add_retarget_report(*report, exit_code);
 }
 
 }  // namespace strata::cli

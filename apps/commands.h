@@ -20,5 +20,6 @@ void add_muscle_report(CLI::App& report, int& exit_code);  // `strata report mus
 void add_subdiv_report(CLI::App& report, int& exit_code);  // `strata report subdiv`, apps/report_subdiv.cpp
 void add_lod_report(CLI::App& report, int& exit_code);     // `strata report lod`, apps/report_lod.cpp
 void add_crowd_report(CLI::App& report, int& exit_code);   // `strata report crowd`, apps/report_crowd.cpp
+void add_retarget_report(CLI::App& report, int& exit_code);  // `strata report retarget`, apps/report_retarget.cpp
 
 }  // namespace strata::cli

@@ -27,12 +27,6 @@ glm::quat rotation_between(glm::vec3 from, glm::vec3 to) {
   return glm::normalize(glm::quat(1.0f + d, c.x, c.y, c.z));
 }
 
-struct ResolvedRow {
-  std::int32_t bvh = -1;
-  std::int32_t hanim = -1;
-  glm::quat align{1, 0, 0, 0};
-};
-
 // Rest position of an aim target: an H-Anim joint centre or site.
 glm::vec3 hanim_point(const Skeleton& s, const std::string& name) {
   const std::int32_t j = s.find_joint(name);
@@ -148,7 +142,8 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
     for (glm::vec3& p : bvh_rest) p = axes * p;
 
   // Resolve the map and each row's alignment rotation once.
-  std::vector<ResolvedRow> row_of(hj);
+  std::vector<RetargetBone> bones;
+  std::vector<RetargetBone> row_of(hj);
   std::vector<std::int32_t> bvh_of(hj, -1);
   for (const RetargetMapping& m : map) {
     const std::int32_t b = motion.find_joint(m.bvh);
@@ -159,9 +154,9 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
                                   (b < 0 ? motion.source + " has no joint '" + m.bvh + "'"
                                          : "skeleton has no joint '" + m.hanim + "'"));
     }
-    ResolvedRow row;
-    row.bvh = b;
-    row.hanim = h;
+    RetargetBone bone;
+    bone.hanim = h;
+    bone.bvh = b;
     if (!m.hanim_aim.empty()) {
       glm::vec3 bvh_dir;
       if (m.bvh_aim.empty()) {
@@ -181,9 +176,12 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
         bvh_dir = bvh_rest[aim] - bvh_rest[b];
       }
       const glm::vec3 hanim_dir = hanim_point(skeleton, m.hanim_aim) - skeleton.centers[h];
-      row.align = rotation_between(hanim_dir, bvh_dir);
+      bone.align = rotation_between(hanim_dir, bvh_dir);
+      bone.aimed = true;
+      bone.hanim_dir = glm::normalize(hanim_dir);
     }
-    row_of[h] = row;
+    bones.push_back(bone);
+    row_of[h] = bone;
     bvh_of[h] = b;
   }
   if (bvh_of[0] < 0) throw std::invalid_argument("retarget: the map does not drive the skeleton's root");
@@ -289,6 +287,8 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
   result.floor_slope = floor_b;
   result.skipped_frames = static_cast<int>(skip);
   result.family = naming.family;
+  result.axes = axes;
+  result.bones = std::move(bones);
   const float dt = motion.frame_time;
   AnimationClip& clip = result.clip;
   clip.name = motion.source.empty() ? std::string("mocap") : motion.source;

@@ -22,6 +22,8 @@
 #include <string_view>
 #include <vector>
 
+#include <glm/mat3x3.hpp>
+
 #include "components/animation_clip.h"
 #include "components/skeleton.h"
 #include "io/bvh.h"
@@ -76,6 +78,16 @@ struct FootContacts {
   int stance_at(int leg, float t) const;
 };
 
+// A resolved map row: which BVH joint drives which H-Anim joint, and the rest alignment (identity for the
+// rest-relative rows: root, spine, neck, head). The H-Anim joint's global rotation is G_bvh * align.
+struct RetargetBone {
+  std::int32_t hanim = -1;
+  std::int32_t bvh = -1;
+  glm::quat align{1, 0, 0, 0};
+  bool aimed = false;          // aligned by bone direction (limbs) rather than rest-relative
+  glm::vec3 hanim_dir{0.0f};   // aimed rows: unit H-Anim rest bone direction (joint -> its aim)
+};
+
 struct RetargetResult {
   AnimationClip clip;
   FootContacts contacts;
@@ -84,6 +96,8 @@ struct RetargetResult {
   float floor_slope = 0.0f;     // dy/dz of the capture's floor that was levelled out (see retarget.cpp)
   int skipped_frames = 0;
   std::string family;           // the naming family recognised ("" with an explicit map)
+  glm::mat3 axes{1.0f};         // the file's axes -> H-Anim's, applied to every frame
+  std::vector<RetargetBone> bones;  // the map as resolved, in map order
   std::vector<std::string> unmapped_hanim;  // H-Anim joints that got no track (identity local rotation)
   // Total horizontal root travel over the clip (last key - first key), metres.
   glm::vec3 root_travel{0.0f};

@@ -331,6 +331,35 @@ TEST(StrataReport, LodWritesTheTiersFigures) {
   EXPECT_EQ(sum, 300u);
 }
 
+TEST(StrataReport, RetargetMeasuresEveryMappedBoneThroughTheEngine) {
+  const fs::path bvh = fs::path(STRATA_SHARED_DATA) / "cmu_mocap_bvh" / "02_02_daz.bvh";
+  if (!fs::exists(bvh)) GTEST_SKIP() << "no " << bvh;
+  const fs::path json = scratch("retarget.json");
+  Result r = run("report retarget --motion " + bvh.string() + " --loops 1 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(j.at("family"), "Poser/DAZ");
+  EXPECT_GT(j.at("frames").get<int>(), 250);  // one pass of the 2.44 s clip at its 120 fps
+  const auto& bones = j.at("bones");
+  EXPECT_EQ(bones.size(), 19u);  // the 25-joint skeleton's mapped joints (no toes in this capture)
+  for (const char* name : {"HumanoidRoot", "vt6", "skullbase", "l_shoulder", "r_elbow", "l_hip", "r_knee"}) {
+    ASSERT_TRUE(bones.contains(name)) << name;
+    const double mean = bones.at(name).at("mean_deg").get<double>(), max = bones.at(name).at("max_deg").get<double>();
+    EXPECT_GE(max, mean) << name;
+    // The arms and spine are driven by the clip alone: the engine's pose matches the capture's to sampling noise;
+    // the legs carry the foot-lock IK's correction, a few degrees.
+    EXPECT_LT(max, std::string(name).find("_hip") != std::string::npos || std::string(name).find("knee") != std::string::npos
+                       ? 15.0 : 0.5) << name;
+  }
+  EXPECT_LT(j.at("foot_lock_slide_mm_max").get<double>(), 1.0);
+  EXPECT_GT(j.at("locked_leg_frames").get<int>(), 100);
+  EXPECT_TRUE(j.contains("targets_met"));
+  // Without a capture: one line saying what is needed.
+  Result missing = run("report retarget --json " + json.string());
+  EXPECT_NE(missing.status, 0);
+  EXPECT_NE(missing.out.find("--motion FILE.bvh is required"), std::string::npos) << missing.out;
+}
+
 TEST(StrataCrowd, ImpostorsOnlyForTheWalk) {
   const fs::path out = scratch("impostor_crowd");
   Result r = run("crowd --walkers 6 --frames 2 --level impostor --no-mp4 --table1-frames 0 --out " + out.string());
