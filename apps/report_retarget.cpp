@@ -71,9 +71,11 @@ int run_retarget_report(const RetargetReportOptions& o) {
     check_scene_inputs(scene_options);
     std::unique_ptr<Crowd> scene = build_scene(scene_options);
     const Skeleton& skeleton = scene->rig().skeleton;
-    // The same retarget the scene made (deterministic), for its resolved map and the capture's frames.
+    // The scene's own retarget (its resolved map and axes); the file again for the capture's frames, which the
+    // scene does not keep.
+    if (!scene->motion.mocap) throw std::invalid_argument("--motion " + scene_options.motion + " set up no capture");
+    const RetargetResult& capture = *scene->motion.mocap;
     const BvhMotion motion = load_bvh_file(scene_options.motion);
-    const RetargetResult capture = retarget_bvh(motion, skeleton);
     const glm::dquat turn = glm::dquat(glm::quat_cast(capture.axes));
     const double dt = motion.frame_time;
     const double duration = capture.clip.duration;
