@@ -1,6 +1,7 @@
 // strata info FILE: load any supported input and print a summary; non-zero exit with a one-line reason on bad input.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <set>
@@ -19,6 +20,14 @@
 
 namespace strata::cli {
 namespace {
+
+// A skinned mesh's rest height, its feet to the top of its head (the meshes are +Y up once loaded).
+float mesh_height(const Mesh& m) {
+  if (m.positions.empty()) return 0.0f;
+  const auto [low, high] = std::minmax_element(m.positions.begin(), m.positions.end(),
+                                               [](const glm::vec3& a, const glm::vec3& b) { return a.y < b.y; });
+  return high->y - low->y;
+}
 
 // Meshes, skinned bodies and motion capture: the formats other than humanoid XML.
 int run_other_info(const std::string& path, InputFormatId format) {
@@ -56,6 +65,7 @@ int run_other_info(const std::string& path, InputFormatId format) {
                 << (format == InputFormatId::Gltf ? "glTF 2.0 skinned mesh" : "MakeHuman hm08 body")
                 << "\njoints:     " << rig.skeleton.joint_count() << "\nvertices:   " << m.vertex_count()
                 << "\ntriangles:  " << m.triangle_count() << "\nparts:      " << m.part_names.size()
+                << "\nstature_m:  " << mesh_height(m) << " (skin)"
                 << "\nclips:      " << rig.clips.size() << "\n";
       for (const AnimationClip& c : rig.clips)
         std::cout << "  " << c.name << ": " << c.duration << " s, " << c.rotations.size() << " rotation + "
@@ -86,6 +96,7 @@ int run_info(const std::string& path) {
   for (std::size_t j = 0; j + 1 < s.skin_offsets.size(); ++j) weighted_joints += s.skin_offsets[j + 1] > s.skin_offsets[j];
   std::size_t limited = 0;
   for (const JointLimits& l : s.limits) limited += l.present;
+  const RestStature stature = rest_stature(s);
   int max_depth = 0;
   for (std::size_t j = 0; j < s.joint_count(); ++j) max_depth = std::max(max_depth, s.depth(static_cast<int>(j)));
 
@@ -97,6 +108,7 @@ int run_info(const std::string& path) {
             << ", depth " << max_depth << ", " << limited << " with limits)\n"
             << "segments:   " << s.segments.size() << "\n"
             << "sites:      " << s.sites.size() << "\n"
+            << "stature_m:  " << stature.metres << " (" << stature.source << ")\n"
             << "skin:       " << s.skin_points.size() << " vertices, " << s.skin_triangles.size() / 3 << " triangles, "
             << weighted.size() << " weighted by " << weighted_joints << " joints\n"
             << "clips:      " << asset.clips.size() << "\n";

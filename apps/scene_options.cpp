@@ -34,6 +34,7 @@ void check_scene_inputs(const SceneOptions& o) {
   check("--skeleton", o.skeleton, false);
   check("--mesh", o.mesh, true);  // a MakeHuman folder is a directory
   if (std::filesystem::path(o.motion).has_extension()) check("--motion", o.motion, false);
+  check("--retarget-map", o.retarget_map, false);
   if (o.muscles != "default" && o.muscles != "none") check("--muscles", o.muscles, false);
   check("--muscle-overrides", o.muscle_overrides, false);
   check("--binding-overrides", o.binding_overrides, false);
@@ -75,6 +76,7 @@ nlohmann::json scene_inputs_json(const SceneOptions& o) {
   return {{"skeleton", file(o.skeleton)},
           {"mesh", file(o.mesh)},
           {"motion", file(o.motion)},  // null: walk when the skeleton can, else its clips
+          {"retarget_map", file(o.retarget_map)},
           {"muscles", o.muscles},
           {"skinning", skinning_mode_name(o.skinning)},
           {"muscle_overrides", file(o.muscle_overrides)},
@@ -94,6 +96,9 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   cmd.add_option("--motion", o.motion,
                  "What moves the walkers: 'walk' (walk generator along a track; the default), 'clip' (the "
                  "file's own animation) or FILE.bvh (motion capture retargeted onto the skeleton, feet locked by IK)");
+  cmd.add_option("--retarget-map", o.retarget_map,
+                 "With --motion FILE.bvh: a text file of 'BVH_JOINT H-ANIM_JOINT' rows mapping a capture whose joint "
+                 "names are not recognised (docs/motion.md)");
   cmd.add_option("--skeleton", o.skeleton, "H-Anim file (X3D or paper XML); default: the shipped 25-joint skeleton");
   cmd.add_option("--mesh", o.mesh,
                  "Skinned body to animate instead of the shipped one: a glTF 2.0 file (.glb/.gltf, plays its "

@@ -92,5 +92,17 @@ struct Skeleton {
 std::string_view canonical_joint_name(std::string_view name);
 // True if `name` is a 2019-only joint name (one that canonical_joint_name changes, or a 2019 hand/foot name).
 bool is_hanim2019_name(std::string_view name);
+// True if `name` is a joint name of H-Anim 1.1 (LOA 4) or of ISO 19774 2019, e.g. "l_hip", "vt12", "humanoid_root",
+// "l_tarsometatarsal_2". Used to read a joint's name off its DEF when the file gives none.
+bool is_hanim_joint_name(std::string_view name);
+
+// The figure's rest height in metres and what it was measured on: the skin's extent when the skeleton has one,
+// else from the lowest joint or site to the skull_tip site, else to the top joint plus 0.13 m (the head above
+// skullbase, anthropometry.md). `source` says which ("skin", "skull_tip", "joints").
+struct RestStature {
+  float metres = 0.0f;
+  const char* source = "joints";
+};
+RestStature rest_stature(const Skeleton& skeleton);
 
 }  // namespace strata

@@ -9,6 +9,15 @@
 // * DEF must precede USE in document order (X3D rule); a USE of a DEF not seen yet is reported as unknown.
 // * A joint reached twice in the skeleton tree through USE (Joe lists HumanoidRoot twice in `skeleton`) is kept
 //   once, with a warning; a joint that reaches itself (a USE of one of its ancestors) is a cycle and an error.
+// * The HAnimHumanoid's own transform (translation, rotation, scale, scaleOrientation, center: X3D Transform
+//   semantics) and the document's length UNIT are baked into every rest position (joint centres, sites, segment
+//   centres of mass, skin points) and into the animation: translation keys take the transform's linear part,
+//   rotation keys are conjugated by its rotation. Keeping the transform as a separate placement was the
+//   alternative; every consumer (camera framing, walker spacing, the walk generator's leg lengths) would then
+//   have to apply it, and a 0.0225-scaled file proved one of them would forget. With a non-uniform scale a
+//   rotation key cannot be baked exactly; that case loads with a warning.
+// * A joint with a DEF and no name takes the H-Anim joint name its DEF ends in (DEF='hanim_l_hip' -> l_hip), with
+//   a warning; a DEF that ends in no H-Anim name is an error, as is a derived name another joint already has.
 // * Joint translation/rotation are ignored (H-Anim's rest pose is identity with absolute centres); a non-identity
 //   value is reported as a warning so a file authored with relative offsets does not load silently wrong.
 #include <algorithm>
@@ -19,6 +28,8 @@
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/matrix.hpp>
 
 #include "io/hanim_readers.h"
 
@@ -56,6 +67,7 @@ class X3dReader {
     finalize_joint_names(sk_);
     read_skin();
     read_animation();
+    apply_humanoid_transform();
     return std::move(asset_);
   }
 
@@ -74,10 +86,21 @@ class X3dReader {
     if (use && defs_.find(use.value()) == defs_.end())
       doc_.fail(n, std::string("USE of unknown DEF '") + use.value() + "'");
     if (is_tag(n, "HAnimHumanoid")) humanoids_.push_back(n);
+    if (is_tag(n, "unit")) read_unit(n);
     if (!use && is_tag(n, "TimeSensor")) time_sensors_.push_back(n);
     if (is_tag(n, "ROUTE")) routes_.push_back(n);
     for (pugi::xml_node child : n.children())
       if (child.type() == pugi::node_element) collect(child);
+  }
+
+  // X3D 3.3's UNIT statement: <head><unit category='length' name='inch' conversionFactor='0.0254'/></head>. Length
+  // and angle scale what the reader takes in; other categories (mass, force) are not read by us.
+  void read_unit(pugi::xml_node n) {
+    const std::string_view category = n.attribute("category").value();
+    if (category != "length" && category != "angle") return;
+    const std::optional<float> factor = xml::float_attr(doc_, n, "conversionFactor");
+    if (!factor || !(*factor > 0.0f)) doc_.fail(n, "conversionFactor must be a positive number");
+    (category == "length" ? metres_per_unit_ : radians_per_unit_) = *factor;
   }
 
   pugi::xml_node resolve(pugi::xml_node n) const {
@@ -139,9 +162,28 @@ class X3dReader {
     return it == joint_index_.end() ? -1 : it->second;
   }
 
+  // The H-Anim joint name a DEF ends in, at an underscore boundary ("hanim_l_hip", "Joe_HumanoidRoot"); the
+  // longest such suffix wins, so "hanim_humanoid_root" gives humanoid_root and not a shorter tail.
+  static std::string hanim_name_in_def(std::string_view def) {
+    for (std::size_t p = 0; p < def.size(); ++p)
+      if ((p == 0 || def[p - 1] == '_') && is_hanim_joint_name(def.substr(p))) return std::string(def.substr(p));
+    return {};
+  }
+
   void read_joint(pugi::xml_node node, std::int32_t parent) {
-    const std::string name = node.attribute("name").value();
-    if (name.empty()) doc_.fail(node, "joint without name");
+    std::string name = node.attribute("name").value();
+    if (name.empty()) {
+      const std::string_view def = node.attribute("DEF").value();
+      if (def.empty()) doc_.fail(node, "joint without name or DEF");
+      name = hanim_name_in_def(def);
+      if (name.empty())
+        doc_.fail(node, "joint without name, and its DEF '" + std::string(def) +
+                            "' does not end in an H-Anim joint name; add name='...'");
+      if (const auto it = name_line_.find(name); it != name_line_.end())
+        doc_.fail(node, "joint without name: its DEF '" + std::string(def) + "' reads as '" + name +
+                            "', which the joint at line " + std::to_string(it->second) + " already has");
+      sk_.warnings.push_back(doc_.warning(node, "joint without name; named '" + name + "' after its DEF"));
+    }
     if (const auto it = name_line_.find(name); it != name_line_.end())
       doc_.fail(node, "duplicate joint name '" + name + "' (first at line " + std::to_string(it->second) + ")");
     name_line_.emplace(name, doc_.line_of(node));
@@ -160,8 +202,8 @@ class X3dReader {
     const auto lower = xml::fixed_floats_attr(doc_, node, "llimit", 3);
     const auto upper = xml::fixed_floats_attr(doc_, node, "ulimit", 3);
     // X3D's empty llimit/ulimit means "no limit"; a file giving only one side keeps the other at a half turn.
-    if (lower && !lower->empty()) limits.lower = glm::vec3((*lower)[0], (*lower)[1], (*lower)[2]);
-    if (upper && !upper->empty()) limits.upper = glm::vec3((*upper)[0], (*upper)[1], (*upper)[2]);
+    if (lower && !lower->empty()) limits.lower = glm::vec3((*lower)[0], (*lower)[1], (*lower)[2]) * radians_per_unit_;
+    if (upper && !upper->empty()) limits.upper = glm::vec3((*upper)[0], (*upper)[1], (*upper)[2]) * radians_per_unit_;
     limits.present = (lower && !lower->empty()) || (upper && !upper->empty());
     check_limits(doc_, node, limits);
 
@@ -239,6 +281,66 @@ class X3dReader {
     site.joint = joint;
     site.position = xml::vec3_attr(doc_, node, "translation").value_or(glm::vec3(0.0f));
     sk_.sites.push_back(std::move(site));
+  }
+
+  // ---- the humanoid's transform and the length unit -----------------------------------------------------------
+  glm::quat axis_angle_attr(pugi::xml_node node, const char* attr) const {
+    const auto r = xml::fixed_floats_attr(doc_, node, attr, 4);
+    if (!r) return glm::quat(1, 0, 0, 0);
+    const glm::vec3 axis((*r)[0], (*r)[1], (*r)[2]);
+    const float length = glm::length(axis);
+    if (!(length > 1e-12f)) return glm::quat(1, 0, 0, 0);  // X3D players read a zero axis as no rotation
+    return glm::angleAxis((*r)[3] * radians_per_unit_, axis / length);
+  }
+
+  void apply_humanoid_transform() {
+    const glm::vec3 translation = xml::vec3_attr(doc_, humanoid_, "translation").value_or(glm::vec3(0.0f));
+    const glm::vec3 center = xml::vec3_attr(doc_, humanoid_, "center").value_or(glm::vec3(0.0f));
+    const glm::vec3 scale = xml::vec3_attr(doc_, humanoid_, "scale").value_or(glm::vec3(1.0f));
+    const glm::quat rotation = axis_angle_attr(humanoid_, "rotation");
+    const glm::quat scale_orientation = axis_angle_attr(humanoid_, "scaleOrientation");
+    if (scale.x == 0.0f || scale.y == 0.0f || scale.z == 0.0f)
+      doc_.fail(humanoid_, "scale has a zero component; the figure would collapse");
+
+    // X3D Transform: P' = T + C + R * SR * S * SR^-1 * (P - C), then the unit to metres on top.
+    const glm::mat3 so(glm::mat3_cast(scale_orientation));
+    const glm::mat3 linear = metres_per_unit_ * glm::mat3(glm::mat3_cast(rotation)) * so *
+                             glm::mat3(glm::vec3(scale.x, 0, 0), glm::vec3(0, scale.y, 0), glm::vec3(0, 0, scale.z)) *
+                             glm::transpose(so);
+    const glm::vec3 offset = metres_per_unit_ * (translation + center) - linear * center;
+    const bool identity = linear == glm::mat3(1.0f) && offset == glm::vec3(0.0f);
+    if (identity) return;
+    auto place = [&](glm::vec3 p) { return linear * p + offset; };
+
+    for (glm::vec3& c : sk_.centers) c = place(c);
+    for (SkeletonSite& site : sk_.sites) site.position = place(site.position);
+    for (SkeletonSegment& segment : sk_.segments) segment.center_of_mass = place(segment.center_of_mass);
+    for (glm::vec3& p : sk_.skin_points) p = place(p);
+    // A mirroring scale turns every triangle inside out; swapping two corners keeps the normals outward.
+    if (glm::determinant(linear) < 0.0f)
+      for (std::size_t t = 0; t + 2 < sk_.skin_triangles.size(); t += 3)
+        std::swap(sk_.skin_triangles[t + 1], sk_.skin_triangles[t + 2]);
+
+    // A joint's animated translation is an offset in its parent's frame, which at rest is the humanoid's: it takes
+    // the linear part only. A rotation key q in the file's frame is R q R^-1 in ours (exact when the scale is
+    // uniform: then the scale commutes with every rotation).
+    const bool uniform = scale.x == scale.y && scale.y == scale.z;
+    bool animated_rotation = false;
+    for (AnimationClip& clip : asset_.clips) {
+      for (TranslationTrack& track : clip.translations)
+        for (glm::vec3& v : track.values) v = linear * v;
+      for (RotationTrack& track : clip.rotations) {
+        animated_rotation = true;
+        for (glm::quat& q : track.values) q = glm::normalize(rotation * q * glm::conjugate(rotation));
+      }
+    }
+    if (!uniform && animated_rotation)
+      sk_.warnings.push_back(doc_.warning(humanoid_, "non-uniform scale: joint rotations of the clips are kept as "
+                                                     "written, so limbs may shear as they turn"));
+    if (rotation != glm::quat(1, 0, 0, 0) &&
+        std::any_of(sk_.limits.begin(), sk_.limits.end(), [](const JointLimits& l) { return l.present; }))
+      sk_.warnings.push_back(doc_.warning(humanoid_, "rotated humanoid: joint limits stay about the file's own "
+                                                     "axes"));
   }
 
   // ---- skin ------------------------------------------------------------------------------------------------
@@ -368,7 +470,8 @@ class X3dReader {
         const glm::vec3 axis(v[0], v[1], v[2]);
         const float length = glm::length(axis);
         // A zero axis has no direction to turn about: X3D players treat it as no rotation.
-        out.rotations.push_back(length > 1e-12f ? glm::angleAxis(v[3], axis / length) : glm::quat(1, 0, 0, 0));
+        out.rotations.push_back(length > 1e-12f ? glm::angleAxis(v[3] * radians_per_unit_, axis / length)
+                                                : glm::quat(1, 0, 0, 0));
       } else {
         out.positions.emplace_back(v[0], v[1], v[2]);
       }
@@ -468,6 +571,8 @@ class X3dReader {
   bool any_skin_weights_ = false;
   pugi::xml_node skin_node_;
   pugi::xml_node skin_coord_;
+  float metres_per_unit_ = 1.0f;   // X3D UNIT length conversionFactor
+  float radians_per_unit_ = 1.0f;  // X3D UNIT angle conversionFactor
   std::map<std::pair<const void*, float>, ParsedInterpolator> parsed_;
 };
 

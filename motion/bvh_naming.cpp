@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 
 #include <glm/geometric.hpp>
+
+#include "io/load_error.h"
 
 namespace strata {
 
@@ -70,75 +73,67 @@ glm::mat3 bvh_file_axes(const glm::vec3& left, const glm::vec3& up) {
   return glm::transpose(glm::mat3(left_axis, up_axis, forward_axis));
 }
 
-BvhNaming recognise_bvh_naming(const BvhMotion& motion) {
-  const NameIndex index(motion);
-  BvhNaming out;
-  std::vector<std::string> unmatched;
-  auto name_of = [&](std::int32_t j) { return motion.joints[static_cast<std::size_t>(j)].name; };
-  auto require = [&](const char* hanim, const std::vector<std::string>& candidates) {
-    const std::int32_t j = index.find(candidates);
-    if (j < 0) unmatched.push_back(std::string(hanim) + " (tried " + joined(candidates) + ")");
-    return j;
-  };
+namespace {
 
-  // Limbs, per side: Poser's one-letter prefix, then the "Left"/"Right" word of the other families.
+// What a map needs of a capture's skeleton: BVH joint indices, -1 where the file has no such joint.
+struct Anatomy {
   struct Side {
-    std::int32_t collar, shoulder, elbow, wrist, hand_aim, hip, knee, ankle, toe;
+    std::int32_t collar = -1, shoulder = -1, elbow = -1, wrist = -1, hand_aim = -1, hip = -1, knee = -1, ankle = -1,
+                 toe = -1;
   };
-  Side sides[2];
-  for (int s = 0; s < 2; ++s) {
-    const std::string p = s == 0 ? "l" : "r", w = s == 0 ? "left" : "right", h = s == 0 ? "l_" : "r_";
-    Side& side = sides[s];
-    side.collar = require((h + "sternoclavicular").c_str(), {p + "collar", w + "shoulder", w + "collar", w + "clavicle"});
-    side.shoulder = require((h + "shoulder").c_str(), {p + "shldr", w + "arm", w + "upperarm"});
-    side.elbow = require((h + "elbow").c_str(), {p + "forearm", w + "forearm", w + "lowerarm"});
-    side.wrist = require((h + "wrist").c_str(), {p + "hand", w + "hand"});
-    side.hip = require((h + "hip").c_str(), {p + "thigh", w + "upleg", w + "hip", w + "thigh", w + "upperleg"});
-    side.knee = require((h + "knee").c_str(), {p + "shin", w + "leg", w + "knee", w + "lowerleg", w + "calf"});
-    side.ankle = require((h + "ankle").c_str(), {p + "foot", w + "foot", w + "ankle"});
-    side.toe = index.find({p + "toe", w + "toebase", w + "toe"});
-    // The hand's direction: its middle finger where the file has one, else its first child or End Site.
-    side.hand_aim = index.find({p + "mid1", w + "handmiddle1", w + "middle1", w + "handmiddle", w + "fingerbase"});
-    if (side.hand_aim >= 0 && side.wrist >= 0 && !index.is_ancestor(side.wrist, side.hand_aim)) side.hand_aim = -1;
-    if (side.toe >= 0 && side.ankle >= 0 && !index.is_ancestor(side.ankle, side.toe)) side.toe = -1;
-  }
-  const std::int32_t neck = require("vc4", {"neck", "neck1"});
-  const std::int32_t head = require("skullbase", {"head"});
-  if (!unmatched.empty())
-    throw std::invalid_argument("retarget: " + motion.source + ": no joint matched for " + joined(unmatched) +
-                                "; the file's joints are not a naming family Strata knows (Poser/DAZ, CMU, Mixamo, "
-                                "HumanIK)");
+  std::int32_t root = -1, vl5 = -1, vt6 = -1, neck = -1, head = -1;
+  Side sides[2];  // left, right
+};
 
-  // The root: the hips by name, else the nearest joint both thighs hang from (a root called anything).
-  std::int32_t root = index.find({"hips", "hip", "pelvis"});
-  if (root < 0 || !index.is_ancestor(root, sides[0].hip) || !index.is_ancestor(root, sides[1].hip)) {
-    root = motion.joints[static_cast<std::size_t>(sides[0].hip)].parent;
-    while (root >= 0 && !index.is_ancestor(root, sides[1].hip)) root = motion.joints[static_cast<std::size_t>(root)].parent;
-    if (root < 0)
-      throw std::invalid_argument("retarget: " + motion.source + ": the thighs '" + name_of(sides[0].hip) + "' and '" +
-                                  name_of(sides[1].hip) + "' share no parent joint");
-  }
-  if (!index.is_ancestor(root, neck))
-    throw std::invalid_argument("retarget: " + motion.source + ": the neck '" + name_of(neck) +
-                                "' does not hang from the hips '" + name_of(root) + "'");
-  // The spine by position: the joints strictly between the root and the neck, lowest first.
-  std::vector<std::int32_t> spine;
-  for (std::int32_t j = motion.joints[static_cast<std::size_t>(neck)].parent; j >= 0 && j != root;
-       j = motion.joints[static_cast<std::size_t>(j)].parent)
-    spine.insert(spine.begin(), j);
+std::vector<std::vector<std::int32_t>> children_of(const BvhMotion& m) {
+  std::vector<std::vector<std::int32_t>> out(m.joint_count());
+  for (std::size_t j = 0; j < m.joint_count(); ++j)
+    if (m.joints[j].parent >= 0) out[static_cast<std::size_t>(m.joints[j].parent)].push_back(static_cast<std::int32_t>(j));
+  return out;
+}
 
-  out.map.push_back({name_of(root), "HumanoidRoot", "", ""});
-  if (!spine.empty()) out.map.push_back({name_of(spine.front()), "vl5", "", ""});
-  if (spine.size() >= 2) out.map.push_back({name_of(spine.back()), "vt6", "", ""});
-  out.map.push_back({name_of(neck), "vc4", "", ""});
-  out.map.push_back({name_of(head), "skullbase", "", ""});
+// The hand's direction when the file names no middle finger: of the wrist's children, the one closest to their mean
+// direction (the middle finger of five), or its only child; -1 (End Site or first child) otherwise.
+std::int32_t middle_child(const std::vector<glm::vec3>& rest,
+                          const std::vector<std::vector<std::int32_t>>& children, std::int32_t wrist) {
+  if (wrist < 0) return -1;
+  const std::vector<std::int32_t>& c = children[static_cast<std::size_t>(wrist)];
+  if (c.size() == 1) return c[0];
+  if (c.size() < 3) return -1;
+  glm::vec3 mean(0.0f);
+  for (const std::int32_t k : c) mean += glm::normalize(rest[k] - rest[wrist] + glm::vec3(1e-9f));
+  std::int32_t best = -1;
+  float best_dot = -2.0f;
+  for (const std::int32_t k : c) {
+    const float d = glm::dot(glm::normalize(rest[k] - rest[wrist] + glm::vec3(1e-9f)), mean);
+    if (d > best_dot) best = k, best_dot = d;
+  }
+  return best;
+}
+
+// The map rows, the file's axes and its units from the anatomy.
+BvhNaming finish(const BvhMotion& motion, Anatomy a, std::string family) {
+  BvhNaming out;
+  out.family = std::move(family);
+  auto name_of = [&](std::int32_t j) { return j < 0 ? std::string() : motion.joints[static_cast<std::size_t>(j)].name; };
+  const std::vector<glm::vec3> rest = motion.rest_positions();
+  const auto children = children_of(motion);
+
+  out.map.push_back({name_of(a.root), "HumanoidRoot", "", ""});
+  if (a.vl5 >= 0) out.map.push_back({name_of(a.vl5), "vl5", "", ""});
+  if (a.vt6 >= 0) out.map.push_back({name_of(a.vt6), "vt6", "", ""});
+  if (a.neck >= 0) out.map.push_back({name_of(a.neck), "vc4", "", ""});
+  if (a.head >= 0) out.map.push_back({name_of(a.head), "skullbase", "", ""});
   for (int s = 0; s < 2; ++s) {
-    const Side& d = sides[s];
+    Anatomy::Side& d = a.sides[s];
     const std::string h = s == 0 ? "l_" : "r_";
-    out.map.push_back({name_of(d.collar), h + "sternoclavicular", name_of(d.shoulder), h + "shoulder"});
-    out.map.push_back({name_of(d.shoulder), h + "shoulder", name_of(d.elbow), h + "elbow"});
-    out.map.push_back({name_of(d.elbow), h + "elbow", name_of(d.wrist), h + "wrist"});
-    out.map.push_back({name_of(d.wrist), h + "wrist", d.hand_aim >= 0 ? name_of(d.hand_aim) : "", h + "hand_tip"});
+    if (d.hand_aim < 0) d.hand_aim = middle_child(rest, children, d.wrist);
+    // A row aims at the next mapped joint down the limb; with none mapped, at the BVH joint's End Site or first
+    // child (an empty bvh_aim, motion/retarget.h).
+    if (d.collar >= 0) out.map.push_back({name_of(d.collar), h + "sternoclavicular", name_of(d.shoulder), h + "shoulder"});
+    if (d.shoulder >= 0) out.map.push_back({name_of(d.shoulder), h + "shoulder", name_of(d.elbow), h + "elbow"});
+    if (d.elbow >= 0) out.map.push_back({name_of(d.elbow), h + "elbow", name_of(d.wrist), h + "wrist"});
+    if (d.wrist >= 0) out.map.push_back({name_of(d.wrist), h + "wrist", name_of(d.hand_aim), h + "hand_tip"});
     out.map.push_back({name_of(d.hip), h + "hip", name_of(d.knee), h + "knee"});
     out.map.push_back({name_of(d.knee), h + "knee", name_of(d.ankle), h + "ankle"});
     if (d.toe >= 0) {
@@ -150,26 +145,11 @@ BvhNaming recognise_bvh_naming(const BvhMotion& motion) {
     }
   }
 
-  // The family, for the user: told by the names that only one family uses.
-  bool prefixed = false;
-  for (const BvhJoint& j : motion.joints) prefixed |= j.name.find(':') != std::string::npos &&
-                                                      normalised_joint_name(j.name.substr(0, 9)) == "mixamorig";
-  const std::string thigh = index.names[static_cast<std::size_t>(sides[0].hip)];
-  if (prefixed)
-    out.family = "Mixamo";
-  else if (thigh == "lthigh")
-    out.family = "Poser/DAZ";
-  else if (index.has("lhipjoint") || index.has("lowerback"))
-    out.family = thigh == "lefthip" ? "CMU (3ds Max)" : "CMU (MotionBuilder)";
-  else if (thigh == "leftupleg")
-    out.family = "HumanIK";
-  else
-    out.family = "generic (Left/Right names)";
-
-  // Axes and units from the rest pose.
-  const std::vector<glm::vec3> rest = motion.rest_positions();
-  out.axes = bvh_file_axes(rest[static_cast<std::size_t>(sides[0].hip)] - rest[static_cast<std::size_t>(sides[1].hip)],
-                           rest[static_cast<std::size_t>(neck)] - rest[static_cast<std::size_t>(root)]);
+  // Axes and units from the rest pose. Up is the root to the neck, or the feet to the root without a neck.
+  const glm::vec3 left = rest[a.sides[0].hip] - rest[a.sides[1].hip];
+  const glm::vec3 up = a.neck >= 0 ? rest[a.neck] - rest[a.root]
+                                   : rest[a.root] - 0.5f * (rest[a.sides[0].ankle] + rest[a.sides[1].ankle]);
+  out.axes = bvh_file_axes(left, up);
   float lo = 1e30f, hi = -1e30f;
   for (std::size_t j = 0; j < motion.joint_count(); ++j) {
     const float y = (out.axes * rest[j]).y;
@@ -199,6 +179,276 @@ BvhNaming recognise_bvh_naming(const BvhMotion& motion) {
   }
   if (out.units.empty()) out.units = "unknown";
   return out;
+}
+
+// ---- by name -----------------------------------------------------------------------------------------------------
+// Fills `a` from the joint names; returns the H-Anim joints no name matched (each with the names tried).
+std::vector<std::string> anatomy_by_name(const BvhMotion& motion, Anatomy& a, std::string& family) {
+  const NameIndex index(motion);
+  std::vector<std::string> unmatched;
+  auto require = [&](const std::string& hanim, const std::vector<std::string>& candidates) {
+    const std::int32_t j = index.find(candidates);
+    if (j < 0) unmatched.push_back(hanim + " (tried " + joined(candidates) + ")");
+    return j;
+  };
+  // Limbs, per side: Poser's one-letter prefix, then the "Left"/"Right" word of the other families.
+  for (int s = 0; s < 2; ++s) {
+    const std::string p = s == 0 ? "l" : "r", w = s == 0 ? "left" : "right", h = s == 0 ? "l_" : "r_";
+    Anatomy::Side& side = a.sides[s];
+    side.collar = require(h + "sternoclavicular", {p + "collar", w + "shoulder", w + "collar", w + "clavicle"});
+    side.shoulder = require(h + "shoulder", {p + "shldr", w + "arm", w + "upperarm"});
+    side.elbow = require(h + "elbow", {p + "forearm", w + "forearm", w + "lowerarm"});
+    side.wrist = require(h + "wrist", {p + "hand", w + "hand"});
+    side.hip = require(h + "hip", {p + "thigh", w + "upleg", w + "hip", w + "thigh", w + "upperleg"});
+    side.knee = require(h + "knee", {p + "shin", w + "leg", w + "knee", w + "lowerleg", w + "calf"});
+    side.ankle = require(h + "ankle", {p + "foot", w + "foot", w + "ankle"});
+    side.toe = index.find({p + "toe", w + "toebase", w + "toe"});
+    // The hand's direction: its middle finger where the file has one, else its first child or End Site.
+    side.hand_aim = index.find({p + "mid1", w + "handmiddle1", w + "middle1", w + "handmiddle", w + "fingerbase"});
+    if (side.hand_aim >= 0 && side.wrist >= 0 && !index.is_ancestor(side.wrist, side.hand_aim)) side.hand_aim = -1;
+    if (side.toe >= 0 && side.ankle >= 0 && !index.is_ancestor(side.ankle, side.toe)) side.toe = -1;
+  }
+  a.neck = require("vc4", {"neck", "neck1"});
+  a.head = require("skullbase", {"head"});
+  if (!unmatched.empty()) return unmatched;
+
+  auto name_of = [&](std::int32_t j) { return motion.joints[static_cast<std::size_t>(j)].name; };
+  // The root: the hips by name, else the nearest joint both thighs hang from (a root called anything).
+  std::int32_t root = index.find({"hips", "hip", "pelvis"});
+  if (root < 0 || !index.is_ancestor(root, a.sides[0].hip) || !index.is_ancestor(root, a.sides[1].hip)) {
+    root = motion.joints[static_cast<std::size_t>(a.sides[0].hip)].parent;
+    while (root >= 0 && !index.is_ancestor(root, a.sides[1].hip)) root = motion.joints[static_cast<std::size_t>(root)].parent;
+    if (root < 0)
+      return {"HumanoidRoot (the thighs '" + name_of(a.sides[0].hip) + "' and '" + name_of(a.sides[1].hip) +
+              "' share no parent joint)"};
+  }
+  if (!index.is_ancestor(root, a.neck))
+    return {"vc4 (the neck '" + name_of(a.neck) + "' does not hang from the hips '" + name_of(root) + "')"};
+  a.root = root;
+  // The spine by position: the joints strictly between the root and the neck, lowest first.
+  std::vector<std::int32_t> spine;
+  for (std::int32_t j = motion.joints[static_cast<std::size_t>(a.neck)].parent; j >= 0 && j != root;
+       j = motion.joints[static_cast<std::size_t>(j)].parent)
+    spine.insert(spine.begin(), j);
+  if (!spine.empty()) a.vl5 = spine.front();
+  if (spine.size() >= 2) a.vt6 = spine.back();
+
+  // The family, for the user: told by the names that only one family uses.
+  bool prefixed = false;
+  for (const BvhJoint& j : motion.joints) prefixed |= j.name.find(':') != std::string::npos &&
+                                                      normalised_joint_name(j.name.substr(0, 9)) == "mixamorig";
+  const std::string thigh = index.names[static_cast<std::size_t>(a.sides[0].hip)];
+  if (prefixed)
+    family = "Mixamo";
+  else if (thigh == "lthigh")
+    family = "Poser/DAZ";
+  else if (index.has("lhipjoint") || index.has("lowerback"))
+    family = thigh == "lefthip" ? "CMU (3ds Max)" : "CMU (MotionBuilder)";
+  else if (thigh == "leftupleg")
+    family = "HumanIK";
+  else
+    family = "generic (Left/Right names)";
+  return {};
+}
+
+// ---- by shape ----------------------------------------------------------------------------------------------------
+// Names unknown: the skeleton read from its rest pose. The pelvis is the first joint from the root where three or
+// more chains branch; of its chains, the one that branches again (at the chest: neck and two arms) is the spine and
+// the two longest others are the legs. Down a leg, the thigh and shin are the two consecutive bones of greatest
+// total length (a CMU leg starts with a short hip bone, a Poser one with a buttock); the arm likewise (upper arm and
+// forearm; the bone before them is the collar). The neck is the chest's chain that rises the most; the head is
+// where the neck's single chain ends or branches (eyes). Left is the side the feet's up x forward points to; a
+// file whose feet show no forward direction is taken to face +Z, the BVH convention, and says so in its family.
+// Returns "" on success, else why the shape could not be read.
+std::string anatomy_by_shape(const BvhMotion& motion, Anatomy& a, std::string& family) {
+  const auto children = children_of(motion);
+  const std::vector<glm::vec3> rest = motion.rest_positions();
+  const std::size_t n = motion.joint_count();
+  // Height of each joint's subtree in joints (a leaf is 1), from the leaves up (parents precede children).
+  std::vector<int> height(n, 1), size(n, 1);
+  for (std::size_t j = n; j-- > 0;)
+    for (const std::int32_t c : children[j]) {
+      height[j] = std::max(height[j], height[c] + 1);
+      size[j] += size[c];
+    }
+  auto first_branch = [&](std::int32_t from, std::size_t branches) {
+    for (std::int32_t j = from; j >= 0;) {
+      if (children[j].size() >= branches) return j;
+      if (children[j].size() != 1) return -1;
+      j = children[j][0];
+    }
+    return -1;
+  };
+  // Down the longest chain from `from`: the joints in order, and the end point (End Site or last joint).
+  auto chain_from = [&](std::int32_t from) {
+    std::vector<std::int32_t> chain;
+    for (std::int32_t j = from; j >= 0;) {
+      chain.push_back(j);
+      std::int32_t next = -1;
+      for (const std::int32_t c : children[j])
+        if (next < 0 || height[c] > height[next]) next = c;
+      j = next;
+    }
+    return chain;
+  };
+  // Index i of the two consecutive bones chain[i] -> chain[i+2] of greatest length; -1 when the chain is short.
+  auto longest_pair = [&](const std::vector<std::int32_t>& chain) {
+    int best = -1;
+    float best_len = 0.0f;
+    for (std::size_t i = 0; i + 2 < chain.size(); ++i) {
+      const float len = glm::length(rest[chain[i + 1]] - rest[chain[i]]) + glm::length(rest[chain[i + 2]] - rest[chain[i + 1]]);
+      if (len > best_len) best = static_cast<int>(i), best_len = len;
+    }
+    return best;
+  };
+
+  const std::int32_t pelvis = first_branch(0, 3);
+  if (pelvis < 0) return "no joint where the legs and the spine branch (three chains from one joint)";
+  std::int32_t spine_child = -1, chest = -1;
+  for (const std::int32_t c : children[pelvis]) {
+    const std::int32_t branch = first_branch(c, 3);
+    if (branch >= 0 && (spine_child < 0 || size[c] > size[spine_child])) spine_child = c, chest = branch;
+  }
+  if (spine_child < 0) return "no chain from the pelvis that branches into a neck and two arms";
+  std::vector<std::int32_t> legs;
+  for (const std::int32_t c : children[pelvis])
+    if (c != spine_child) legs.push_back(c);
+  std::sort(legs.begin(), legs.end(), [&](std::int32_t x, std::int32_t y) { return height[x] > height[y]; });
+  if (legs.size() < 2 || height[legs[1]] < 3) return "the pelvis has fewer than two chains of three joints (legs)";
+  legs.resize(2);
+
+  const glm::vec3 up_guess = rest[chest] - rest[pelvis];
+  if (!(glm::length(up_guess) > 0.0f)) return "the chest and the pelvis are at one point";
+  // The neck: the chest's chain whose joints lie highest above the chest.
+  std::int32_t neck = -1;
+  float neck_rise = -1e30f;
+  std::vector<std::int32_t> arms;
+  for (const std::int32_t c : children[chest]) {
+    glm::vec3 mean(0.0f);
+    const std::vector<std::int32_t> chain = chain_from(c);
+    for (const std::int32_t j : chain) mean += rest[j];
+    const float rise = glm::dot(mean / static_cast<float>(chain.size()) - rest[chest], up_guess);
+    if (rise > neck_rise) neck = c, neck_rise = rise;
+  }
+  for (const std::int32_t c : children[chest])
+    if (c != neck) arms.push_back(c);
+  std::sort(arms.begin(), arms.end(), [&](std::int32_t x, std::int32_t y) { return height[x] > height[y]; });
+  if (arms.size() < 2 || height[arms[1]] < 3) return "the chest has fewer than two chains of three joints (arms)";
+  arms.resize(2);
+
+  Anatomy::Side found_legs[2], found_arms[2];
+  glm::vec3 forward(0.0f);
+  for (int k = 0; k < 2; ++k) {
+    const std::vector<std::int32_t> chain = chain_from(legs[k]);
+    const int i = longest_pair(chain);
+    if (i < 0) return "a leg chain is too short";
+    Anatomy::Side& leg = found_legs[k];
+    leg.hip = chain[i], leg.knee = chain[i + 1], leg.ankle = chain[i + 2];
+    if (static_cast<std::size_t>(i) + 3 < chain.size()) leg.toe = chain[i + 3];
+    const BvhJoint& last = motion.joints[chain.back()];
+    const glm::vec3 tip = last.has_end_site ? rest[chain.back()] + last.end_site : rest[chain.back()];
+    forward += tip - rest[leg.ankle];
+    const std::vector<std::int32_t> arm = chain_from(arms[k]);
+    const int a_i = longest_pair(arm);
+    if (a_i < 0) return "an arm chain is too short";
+    Anatomy::Side& side = found_arms[k];
+    side.shoulder = arm[a_i], side.elbow = arm[a_i + 1], side.wrist = arm[a_i + 2];
+    if (a_i >= 1) side.collar = arm[a_i - 1];
+  }
+  const glm::vec3 up = glm::normalize(up_guess);
+  forward -= glm::dot(forward, up) * up;
+  const float leg_length = glm::length(rest[found_legs[0].ankle] - rest[found_legs[0].hip]);
+  glm::vec3 left;
+  if (glm::length(forward) > 0.1f * leg_length) {
+    left = glm::cross(up, glm::normalize(forward));
+    family = "by shape (names not recognised)";
+  } else {
+    left = glm::vec3(1, 0, 0) - glm::dot(glm::vec3(1, 0, 0), up) * up;  // faces +Z: +X is the left
+    family = "by shape (names not recognised; facing +Z assumed)";
+  }
+  auto side_of = [&](std::int32_t j) { return glm::dot(rest[j] - rest[pelvis], left); };
+  const bool legs_swapped = side_of(found_legs[0].hip) < side_of(found_legs[1].hip);
+  const bool arms_swapped = side_of(found_arms[0].shoulder) < side_of(found_arms[1].shoulder);
+  if (side_of(found_legs[legs_swapped ? 1 : 0].hip) == side_of(found_legs[legs_swapped ? 0 : 1].hip))
+    return "the two legs are on one side of the body";
+  for (int s = 0; s < 2; ++s) {
+    a.sides[s] = found_legs[(s == 0) != legs_swapped ? 0 : 1];
+    const Anatomy::Side& arm = found_arms[(s == 0) != arms_swapped ? 0 : 1];
+    a.sides[s].collar = arm.collar, a.sides[s].shoulder = arm.shoulder, a.sides[s].elbow = arm.elbow,
+    a.sides[s].wrist = arm.wrist;
+  }
+
+  // The neck's chain: on while it does not branch; the head is where it ends or branches.
+  std::int32_t head = neck;
+  while (children[head].size() == 1) head = children[head][0];
+  a.root = pelvis;
+  a.neck = neck;
+  a.head = head != neck ? head : -1;
+  std::vector<std::int32_t> spine;
+  for (std::int32_t j = motion.joints[static_cast<std::size_t>(neck)].parent; j >= 0 && j != pelvis;
+       j = motion.joints[static_cast<std::size_t>(j)].parent)
+    spine.insert(spine.begin(), j);
+  if (!spine.empty()) a.vl5 = spine.front();
+  if (spine.size() >= 2) a.vt6 = spine.back();
+  return {};
+}
+
+}  // namespace
+
+BvhNaming recognise_bvh_naming(const BvhMotion& motion) {
+  Anatomy by_name;
+  std::string family;
+  const std::vector<std::string> unmatched = anatomy_by_name(motion, by_name, family);
+  if (unmatched.empty()) return finish(motion, by_name, family);
+  Anatomy by_shape;
+  const std::string why = anatomy_by_shape(motion, by_shape, family);
+  if (why.empty()) return finish(motion, by_shape, family);
+  std::string hanim;
+  for (const std::string& u : unmatched) {
+    if (!hanim.empty()) hanim += ", ";
+    hanim += u.substr(0, u.find(' '));
+  }
+  throw std::invalid_argument("retarget: " + motion.source + ": cannot map the capture's joints: no joint name matched " +
+                              hanim + " (families known: Poser/DAZ, CMU, Mixamo, HumanIK), and by shape: " + why +
+                              "; pass --retarget-map FILE with one 'BVH_JOINT H-ANIM_JOINT' row per joint "
+                              "(docs/motion.md)");
+}
+
+BvhNaming bvh_naming_from_map(const BvhMotion& motion, const RetargetMapFile& file) {
+  Anatomy a;
+  std::map<std::string, std::int32_t> rows;  // H-Anim 1.1 name -> BVH joint
+  for (const RetargetMapRow& row : file.rows) {
+    const std::int32_t b = motion.find_joint(row.bvh);
+    if (b < 0)
+      throw LoadError(file.source + ":" + std::to_string(row.line) + ": " + motion.source + " has no joint '" +
+                      row.bvh + "'");
+    rows[std::string(canonical_joint_name(row.hanim))] = b;
+  }
+  auto at = [&](const std::string& hanim) {
+    const auto it = rows.find(hanim);
+    return it == rows.end() ? -1 : it->second;
+  };
+  a.root = at("HumanoidRoot"), a.vl5 = at("vl5"), a.vt6 = at("vt6"), a.neck = at("vc4"), a.head = at("skullbase");
+  for (int s = 0; s < 2; ++s) {
+    const std::string h = s == 0 ? "l_" : "r_";
+    Anatomy::Side& d = a.sides[s];
+    d.collar = at(h + "sternoclavicular"), d.shoulder = at(h + "shoulder"), d.elbow = at(h + "elbow");
+    d.wrist = at(h + "wrist"), d.hip = at(h + "hip"), d.knee = at(h + "knee"), d.ankle = at(h + "ankle");
+    d.toe = at(h + "midtarsal");
+  }
+  // A child row must hang below its parent row in the capture, or its bone would aim backwards.
+  const NameIndex index(motion);
+  for (int s = 0; s < 2; ++s) {
+    const Anatomy::Side& d = a.sides[s];
+    const std::pair<std::int32_t, std::int32_t> links[] = {{a.root, d.hip}, {d.hip, d.knee}, {d.knee, d.ankle},
+                                                          {d.ankle, d.toe}, {d.collar, d.shoulder},
+                                                          {d.shoulder, d.elbow}, {d.elbow, d.wrist}};
+    for (const auto& [upper, lower] : links)
+      if (upper >= 0 && lower >= 0 && !index.is_ancestor(upper, lower))
+        throw LoadError(file.source + ": '" + motion.joints[lower].name + "' does not hang from '" +
+                        motion.joints[upper].name + "' in " + motion.source);
+  }
+  return finish(motion, a, "map " + file.source);
 }
 
 }  // namespace strata

@@ -21,12 +21,14 @@
 #include <glm/mat3x3.hpp>
 
 #include "io/bvh.h"
+#include "io/retarget_map_file.h"
 #include "motion/retarget.h"
 
 namespace strata {
 
 struct BvhNaming {
-  std::string family;                  // "Poser/DAZ", "CMU (MotionBuilder)", "CMU (3ds Max)", "Mixamo", "HumanIK"
+  std::string family;                  // "Poser/DAZ", "CMU (MotionBuilder)", "CMU (3ds Max)", "Mixamo", "HumanIK",
+                                       // "by shape (...)" or "map FILE"
   std::vector<RetargetMapping> map;    // onto the 25-joint H-Anim skeleton
   glm::mat3 axes{1.0f};                // file axes -> H-Anim axes (a rotation, signed permutation of the axes)
   float stature = 0.0f;                // rest pose's height, file units (lowest to highest joint or end site)
@@ -34,9 +36,15 @@ struct BvhNaming {
   float metres_per_unit = 0.0f;        // for the units above; 0 when unknown
 };
 
-// Recognises the naming family of `motion` and builds its map. Throws std::invalid_argument with one line naming
-// the H-Anim joints no BVH joint matched (and the names tried) when the file cannot be mapped.
+// Recognises the naming family of `motion` and builds its map; names it does not know are read by the skeleton's
+// shape instead (family "by shape ..."; bvh_naming.cpp says how). Throws std::invalid_argument with one line naming
+// the H-Anim joints no BVH joint name matched, why the shape could not be read, and how to pass a map file.
 BvhNaming recognise_bvh_naming(const BvhMotion& motion);
+
+// The map a retarget map file gives (io/retarget_map_file.h), with each row's aim and the file's axes and units
+// worked out as for a recognised family. Throws LoadError "MAPFILE:LINE: ..." for a BVH joint the capture lacks,
+// and "MAPFILE: ..." for rows whose joints do not hang one below the other as the H-Anim ones do.
+BvhNaming bvh_naming_from_map(const BvhMotion& motion, const RetargetMapFile& file);
 
 // The rotation from a BVH file's axes to H-Anim's, from its rest pose's left direction (left hip minus right hip)
 // and up direction (root to neck), each snapped to the nearest signed axis; identity when they are degenerate.

@@ -127,7 +127,8 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
   const std::size_t hj = skeleton.joint_count();
   // The map: recognised from the names (and the file's axes with it) unless the caller gave one.
   BvhNaming naming;
-  glm::mat3 axes(1.0f);
+  glm::mat3 axes = options.axes;
+  naming.family = options.family;
   if (options.map.empty()) {
     naming = recognise_bvh_naming(motion);
     axes = naming.axes;

@@ -44,8 +44,12 @@ struct RetargetMapping {
 
 struct RetargetOptions {
   // Empty: recognised from the file's joint names (motion/bvh_naming.h: Poser/DAZ, CMU, Mixamo, HumanIK), with
-  // the file's axes turned to H-Anim's. Given: used as is, the file's axes taken to be H-Anim's already.
+  // the file's axes turned to H-Anim's. Given: used as is, with `axes` below (identity: H-Anim's already).
   std::vector<RetargetMapping> map;
+  // With a given map: the file's axes -> H-Anim's, and the name reported as the family (bvh_naming_from_map of
+  // motion/bvh_naming.h fills both from a map file).
+  glm::mat3 axes{1.0f};
+  std::string family;
   // Leading frames dropped. The CMU/Daz files start in the zero-rotation T-pose and ramp into the walk over frames
   // 0-4 (left shoulder Z: 0, -23, -46, -66, -79, -84 deg on frames 0..5, then it turns back): frame 5 is the first
   // walking frame. A fixed count rather than a detector: a detector needs a "walking" threshold that would be just

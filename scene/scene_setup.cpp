@@ -13,6 +13,8 @@
 
 #include "io/bvh.h"
 #include "io/hanim_loader.h"
+#include "io/retarget_map_file.h"
+#include "motion/bvh_naming.h"
 #include "motion/retarget.h"
 #include "io/gltf.h"
 #include "io/makehuman.h"
@@ -123,6 +125,8 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   config.spacing = o.spacing;
   config.clip = resolve_clip(rig, o.clip, o.rest);
   auto scene = std::make_unique<Crowd>(std::move(rig));
+  if (!o.retarget_map.empty() && !std::filesystem::path(o.motion).has_extension())
+    throw std::invalid_argument("--retarget-map needs --motion FILE.bvh (it maps a capture's joints)");
   if (o.motion == "walk" || o.motion.empty()) {
     const bool implicit = o.motion.empty();
     if (implicit && (!o.clip.empty() || o.rest || !scene->motion.walk_error.empty())) {
@@ -137,7 +141,16 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
     require_input(o.motion, kGivesMotion, "--motion");
     // Motion capture: its naming family recognised (motion/bvh_naming.h) and retargeted onto this skeleton, feet
     // locked by IK in stance.
-    set_mocap(*scene, retarget_bvh(load_bvh_file(o.motion), scene->rig().skeleton));
+    // A map file, when given, replaces the recognition (its rows' aims and the file's axes worked out the same way).
+    const BvhMotion capture = load_bvh_file(o.motion);
+    RetargetOptions retarget;
+    if (!o.retarget_map.empty()) {
+      const BvhNaming naming = bvh_naming_from_map(capture, load_retarget_map_file(o.retarget_map));
+      retarget.map = naming.map;
+      retarget.axes = naming.axes;
+      retarget.family = naming.family;
+    }
+    set_mocap(*scene, retarget_bvh(capture, scene->rig().skeleton, retarget));
     config.motion = MotionSource::Mocap;
   } else {
     throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");

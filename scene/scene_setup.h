@@ -17,6 +17,7 @@ struct SceneOptions {
   std::size_t walkers = 25;
   std::string skeleton;  // empty = the embedded default skeleton
   std::string mesh;      // a skinned body to use instead: .glb/.gltf, a MakeHuman folder, or an X3D with a skin
+  std::string retarget_map;  // with a .bvh motion: a map file (io/retarget_map_file.h) instead of recognising names
   std::string clip;      // name, index or "all"; empty = all clips
   bool rest = false;
   std::uint64_t seed = 1;

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -358,6 +359,109 @@ TEST(StrataReport, RetargetMeasuresEveryMappedBoneThroughTheEngine) {
   Result missing = run("report retarget --json " + json.string());
   EXPECT_NE(missing.status, 0);
   EXPECT_NE(missing.out.find("--motion FILE.bvh is required"), std::string::npos) << missing.out;
+}
+
+// The shipped capture with every joint renamed "b<N>": read by its shape, and by a map file naming the joints.
+TEST(StrataReport, RetargetReadsUnknownNamesByShapeOrByAMapFile) {
+  const fs::path bvh = fs::path(STRATA_SHARED_DATA) / "cmu_mocap_bvh" / "02_02_daz.bvh";
+  if (!fs::exists(bvh)) GTEST_SKIP() << "no " << bvh;
+  std::ifstream in(bvh);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::map<std::string, std::string> renamed;
+  std::istringstream lines(text);
+  std::string out_text, line;
+  int next = 0;
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string keyword, name;
+    words >> keyword >> name;
+    if (keyword == "ROOT" || keyword == "JOINT") {
+      renamed[name] = "b" + std::to_string(next++);
+      line = line.substr(0, line.find(keyword)) + keyword + " " + renamed[name];
+    }
+    out_text += line + "\n";
+  }
+  const fs::path odd = scratch("odd_names.bvh");
+  std::ofstream(odd) << out_text;
+
+  const fs::path json = scratch("odd.json");
+  Result shape = run("report retarget --motion " + odd.string() + " --loops 1 --json " + json.string());
+  ASSERT_EQ(shape.status, 0) << shape.out;
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(j.at("family"), "by shape (names not recognised)");
+  EXPECT_EQ(j.at("bones").size(), 19u);
+  EXPECT_LT(j.at("bones").at("l_shoulder").at("max_deg").get<double>(), 0.5);
+
+  const fs::path map = scratch("lab.map");
+  std::ofstream(map) << "# lab capture\n" << renamed["hip"] << " HumanoidRoot\n" << renamed["chest"] << " vt6\n"
+                     << renamed["lThigh"] << " l_hip\n" << renamed["lShin"] << " l_knee\n" << renamed["lFoot"]
+                     << " l_ankle\n" << renamed["rThigh"] << " r_hip\n" << renamed["rShin"] << " r_knee\n"
+                     << renamed["rFoot"] << " r_ankle\n";
+  Result mapped = run("report retarget --motion " + odd.string() + " --retarget-map " + map.string() +
+                      " --loops 1 --json " + json.string());
+  ASSERT_EQ(mapped.status, 0) << mapped.out;
+  j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(j.at("family"), "map " + map.string());
+  EXPECT_EQ(j.at("bones").size(), 8u);
+  EXPECT_LT(j.at("foot_lock_slide_mm_max").get<double>(), 1.0);
+
+  // A map row naming a joint the capture lacks: one line naming the map file's line; a map without a capture.
+  std::ofstream(map, std::ios::app) << "nosuch vc4\n";
+  Result bad = run("report retarget --motion " + odd.string() + " --retarget-map " + map.string() + " --json " +
+                   json.string());
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.out.find("lab.map:10: odd_names.bvh has no joint 'nosuch'"), std::string::npos) << bad.out;
+  EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << bad.out;
+  Result no_capture = run("crowd --walkers 1 --frames 1 --no-mp4 --retarget-map " + map.string() + " --out " +
+                          scratch("nomap").string());
+  EXPECT_NE(no_capture.status, 0);
+  EXPECT_NE(no_capture.out.find("--retarget-map needs --motion FILE.bvh"), std::string::npos) << no_capture.out;
+}
+
+// A humanoid written in its own units with a scale that brings it to metres (the 44x giant of issue 17): info
+// reports a person's stature and the walk generator walks it at a person's size.
+TEST(StrataInfo, AScaledHumanoidIsReadInMetres) {
+  std::ifstream in(source_root() + "/data/default_skeleton.x3d");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Every centre and site translation divided by 0.0225, and the humanoid scaled back.
+  std::string scaled;
+  std::size_t at = 0;
+  while (true) {
+    std::size_t c = text.find("center='", at), t = text.find("translation='", at);
+    const std::size_t next = std::min(c, t);
+    if (next == std::string::npos) break;
+    const std::size_t open = text.find('\'', next) + 1, close = text.find('\'', open);
+    scaled += text.substr(at, open - at);
+    std::istringstream numbers(text.substr(open, close - open));
+    std::string written;
+    for (double v; numbers >> v;) {
+      if (!written.empty()) written += ' ';
+      written += std::to_string(v / 0.0225);
+    }
+    scaled += written;
+    at = close;
+  }
+  scaled += text.substr(at);
+  const std::size_t humanoid = scaled.find("<HAnimHumanoid ");
+  ASSERT_NE(humanoid, std::string::npos);
+  scaled.insert(humanoid + 15, "scale='0.0225 0.0225 0.0225' ");
+  const fs::path file = scratch("scaled.x3d");
+  std::ofstream(file) << scaled;
+
+  Result plain = run("info " + source_root() + "/data/default_skeleton.x3d");
+  Result r = run("info " + file.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const auto stature = [](const std::string& out) {
+    const std::size_t p = out.find("stature_m:");
+    return p == std::string::npos ? -1.0 : std::stod(out.substr(p + 10));
+  };
+  EXPECT_NEAR(stature(r.out), stature(plain.out), 1e-3) << r.out;
+  EXPECT_NEAR(stature(r.out), 1.75, 0.05) << r.out;
+
+  const fs::path out = scratch("scaled_crowd");
+  Result crowd = run("crowd --skeleton " + file.string() + " --walkers 2 --frames 2 --level -1 --no-mp4 "
+                     "--table1-frames 0 --width 160 --height 120 --out " + out.string());
+  ASSERT_EQ(crowd.status, 0) << crowd.out;
 }
 
 TEST(StrataCrowd, ImpostorsOnlyForTheWalk) {

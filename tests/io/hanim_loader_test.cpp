@@ -106,7 +106,9 @@ TEST(XmlUtil, ErrorMessageFormat) {
                              "dir/file.x3d");
     ADD_FAILURE();
   } catch (const LoadError& e) {
-    EXPECT_STREQ(e.what(), "dir/file.x3d:4: <HAnimJoint DEF='J_x'>: joint without name");
+    EXPECT_STREQ(e.what(),
+                 "dir/file.x3d:4: <HAnimJoint DEF='J_x'>: joint without name, and its DEF 'J_x' does not end in an "
+                 "H-Anim joint name; add name='...'");
   }
 }
 
@@ -716,6 +718,163 @@ TEST(RealFiles, Humanoid1) {
   ASSERT_GE(heel, 0);
   EXPECT_EQ(s.sites[heel].position, glm::vec3(0.0974f, 0.0259f, -0.1171f));  // absolute
   EXPECT_EQ(s.joint_names[s.sites[heel].joint], "l_knee");
+}
+
+// ---- the humanoid's transform, units and DEF-only joints ------------------------------------------------------
+
+// A small figure written in its own units: root at 40, hips at 40, knees at 20, ankles at 2, a skull_tip at 78.
+std::string unit_figure(const std::string& humanoid_attributes, const std::string& head = "") {
+  return "<X3D><head>" + head + "</head><Scene>\n<HAnimHumanoid name='u' " + humanoid_attributes + ">\n" +
+         R"(<HAnimJoint DEF='R' name='HumanoidRoot' center='0 40 0' containerField='skeleton'>
+ <HAnimJoint name='l_hip' center='4 40 0'><HAnimJoint name='l_knee' center='4 20 1'>
+  <HAnimJoint name='l_ankle' center='4 2 0'/></HAnimJoint></HAnimJoint>
+ <HAnimSite name='skull_tip' translation='0 78 0'/>
+</HAnimJoint>
+<Coordinate containerField='skinCoord' point='0 0 0 0 80 0 1 40 0'/>
+<IndexedFaceSet containerField='skin' coordIndex='0 1 2 -1'/>
+</HAnimHumanoid>
+<TimeSensor DEF='T' cycleInterval='1'/>
+<PositionInterpolator DEF='P' key='0 1' keyValue='0 0 0 10 0 0'/>
+<OrientationInterpolator DEF='O' key='0 1' keyValue='0 1 0 0 0 1 0 0.5'/>
+<ROUTE fromNode='T' fromField='fraction_changed' toNode='P' toField='set_fraction'/>
+<ROUTE fromNode='T' fromField='fraction_changed' toNode='O' toField='set_fraction'/>
+<ROUTE fromNode='P' fromField='value_changed' toNode='R' toField='set_translation'/>
+<ROUTE fromNode='O' fromField='value_changed' toNode='R' toField='set_rotation'/>
+</Scene></X3D>)";
+}
+
+void expect_vec_near(const glm::vec3& got, const glm::vec3& want, const char* what) {
+  EXPECT_NEAR(got.x, want.x, 1e-5f) << what;
+  EXPECT_NEAR(got.y, want.y, 1e-5f) << what;
+  EXPECT_NEAR(got.z, want.z, 1e-5f) << what;
+}
+
+// The issue's giant: joint centres in the file's units and a humanoid scale that brings them to metres.
+TEST(X3dHumanoidTransform, ScaleBringsTheFigureToMetres) {
+  const HumanoidAsset a = load_humanoid_text(unit_figure("scale='0.0225 0.0225 0.0225'"), "scaled.x3d");
+  const Skeleton& s = a.skeleton;
+  expect_vec_near(s.centers[s.find_joint("l_knee")], glm::vec3(4, 20, 1) * 0.0225f, "knee");
+  expect_vec_near(s.sites[s.find_site("skull_tip")].position, glm::vec3(0, 78, 0) * 0.0225f, "skull tip");
+  expect_vec_near(s.skin_points[1], glm::vec3(0, 80, 0) * 0.0225f, "skin");
+  // The root's animated translation is an offset: scaled, not moved. A uniform scale leaves rotations alone.
+  expect_vec_near(a.clips.at(0).translations.at(0).values[1], glm::vec3(10, 0, 0) * 0.0225f, "translation key");
+  EXPECT_NEAR(a.clips[0].rotations.at(0).values[1].y, std::sin(0.25f), 1e-6f);
+  const RestStature st = rest_stature(s);
+  EXPECT_NEAR(st.metres, 80 * 0.0225f, 1e-5f);
+  EXPECT_STREQ(st.source, "skin");
+}
+
+// X3D Transform order: P' = T + C + R * S * (P - C). Scaled 0.01 about a centre at the hips, turned a quarter
+// about +Y and lifted by 0.5: each point checked against that formula written out by hand.
+TEST(X3dHumanoidTransform, TranslationRotationScaleAndCentreComposeAsX3dTransform) {
+  const HumanoidAsset a = load_humanoid_text(
+      unit_figure("scale='0.01 0.01 0.01' center='0 40 0' rotation='0 1 0 1.5707963' translation='0 0.5 0'"),
+      "placed.x3d");
+  const Skeleton& s = a.skeleton;
+  // knee (4 20 1) - C = (4 -20 1); scaled (0.04 -0.2 0.01); +Y quarter turn maps (x, y, z) -> (z, y, -x).
+  expect_vec_near(s.centers[s.find_joint("l_knee")], glm::vec3(0.01f, -0.2f, -0.04f) + glm::vec3(0, 40.5f, 0),
+                  "knee");
+  // The root's translation key turns with the figure; its rotation key (about +Y) commutes with a +Y turn.
+  expect_vec_near(a.clips.at(0).translations.at(0).values[1], glm::vec3(0, 0, -0.1f), "translation key");
+  EXPECT_NEAR(a.clips[0].rotations.at(0).values[1].y, std::sin(0.25f), 1e-5f);
+}
+
+// A Z-up file stood up by the humanoid's rotation: a rotation key about the file's +Z (its vertical) becomes one
+// about our +Y, so an animated turn stays a turn about the vertical.
+TEST(X3dHumanoidTransform, RotationKeysAreConjugatedIntoTheUprightFrame) {
+  std::string text = unit_figure("scale='0.01 0.01 0.01' rotation='1 0 0 -1.5707963'");
+  text.replace(text.find("0 1 0 0 0 1 0 0.5"), 17, "0 0 1 0 0 0 1 0.5");
+  const HumanoidAsset a = load_humanoid_text(text, "zup.x3d");
+  const glm::quat q = a.clips.at(0).rotations.at(0).values[1];
+  EXPECT_NEAR(std::abs(q.y), std::sin(0.25f), 1e-5f);
+  EXPECT_NEAR(q.x, 0.0f, 1e-5f);
+  EXPECT_NEAR(q.z, 0.0f, 1e-5f);
+  // The file's +Z (its up) is our +Y: the knee written at z = 1 is now 1 cm up... and the file's y went to -z.
+  expect_vec_near(a.skeleton.centers[a.skeleton.find_joint("l_knee")], glm::vec3(0.04f, 0.01f, -0.2f), "knee");
+}
+
+// A mirroring scale keeps the skin's triangles facing out.
+TEST(X3dHumanoidTransform, MirroringScaleRewindsTheSkinTriangles) {
+  const Skeleton s = load_humanoid_text(unit_figure("scale='-0.01 0.01 0.01'"), "mirror.x3d").skeleton;
+  EXPECT_EQ(s.skin_triangles, (std::vector<std::uint32_t>{0, 2, 1}));
+  const Skeleton plain = load_humanoid_text(unit_figure("scale='0.01 0.01 0.01'"), "plain.x3d").skeleton;
+  EXPECT_EQ(plain.skin_triangles, (std::vector<std::uint32_t>{0, 1, 2}));
+  expect_load_error(unit_figure("scale='0.01 0 0.01'"), 2, {"<HAnimHumanoid", "scale has a zero component"});
+}
+
+TEST(X3dHumanoidTransform, NonUniformScaleWithAnimatedRotationsWarns) {
+  const Skeleton s = load_humanoid_text(unit_figure("scale='0.01 0.02 0.01'"), "sheared.x3d").skeleton;
+  EXPECT_TRUE(any_warning_contains(s, {"sheared.x3d:2:", "non-uniform scale"}));
+  const Skeleton u = load_humanoid_text(unit_figure("scale='0.01 0.01 0.01'"), "even.x3d").skeleton;
+  EXPECT_FALSE(any_warning_contains(u, {"non-uniform"}));
+}
+
+// X3D 3.3's UNIT statement: lengths in inches (and angles in degrees) are read into metres (and radians), and the
+// humanoid's scale applies on top.
+TEST(X3dUnits, LengthAndAngleUnitsAreHonoured) {
+  const std::string inches = "<unit category='length' name='inch' conversionFactor='0.0254'/>";
+  const HumanoidAsset a = load_humanoid_text(unit_figure("", inches), "inches.x3d");
+  expect_vec_near(a.skeleton.centers[a.skeleton.find_joint("l_knee")], glm::vec3(4, 20, 1) * 0.0254f, "knee");
+  EXPECT_NEAR(rest_stature(a.skeleton).metres, 80 * 0.0254f, 1e-5f);
+  const HumanoidAsset halved = load_humanoid_text(unit_figure("scale='0.5 0.5 0.5'", inches), "half.x3d");
+  EXPECT_NEAR(rest_stature(halved.skeleton).metres, 40 * 0.0254f, 1e-5f);
+
+  std::string degrees = unit_figure("", "<unit category='angle' name='degree' conversionFactor='0.017453293'/>");
+  degrees.replace(degrees.find("0 1 0 0.5"), 9, "0 1 0 90");
+  const HumanoidAsset d = load_humanoid_text(degrees, "degrees.x3d");
+  EXPECT_NEAR(d.clips.at(0).rotations.at(0).values[1].y, std::sin(0.25f * 3.14159265f), 1e-5f);
+
+  expect_load_error(unit_figure("", "\n<unit category='length' name='x' conversionFactor='-1'/>"), 2,
+                    {"<unit", "conversionFactor must be a positive number"});
+}
+
+// Web3D examples with joints that carry only a DEF: the name is the H-Anim joint name the DEF ends in.
+TEST(X3d, JointWithOnlyADefTakesItsHanimNameFromTheDef) {
+  const Skeleton s = load_humanoid_text(std::string(kOpen) +
+                                            "<HAnimJoint DEF='hanim_humanoid_root' center='0 1 0'>\n"
+                                            " <HAnimJoint DEF='Joe_l_hip' center='0.1 0.9 0'>\n"
+                                            "  <HAnimJoint DEF='x_l_thumb2' center='0.1 0.5 0'/>\n"
+                                            " </HAnimJoint>\n"
+                                            " <HAnimJoint DEF='hanim_vt12' center='0 1.1 0'/>\n"
+                                            "</HAnimJoint>\n" +
+                                            kClose,
+                                        "defs.x3d")
+                        .skeleton;
+  EXPECT_EQ(s.source_joint_names,
+            (std::vector<std::string>{"humanoid_root", "l_hip", "l_thumb2", "vt12"}));
+  EXPECT_EQ(s.joint_names[0], "HumanoidRoot");
+  EXPECT_TRUE(any_warning_contains(s, {"defs.x3d:4:", "Joe_l_hip", "named 'l_hip' after its DEF"}));
+  // Ambiguous: the DEF reads as a name another joint already has.
+  expect_load_error(std::string(kOpen) + "<HAnimJoint name='l_hip' center='0 1 0'>\n" +
+                        "<HAnimJoint DEF='other_l_hip' center='0 1 0'/></HAnimJoint>\n" + kClose,
+                    4, {"other_l_hip", "reads as 'l_hip'", "line 3 already has"});
+  // Not a joint name: vt13 does not exist, l_index4 neither.
+  expect_load_error(std::string(kOpen) + "<HAnimJoint DEF='h_vt13' center='0 1 0'/>\n" + kClose, 3,
+                    {"h_vt13", "does not end in an H-Anim joint name"});
+  EXPECT_FALSE(is_hanim_joint_name("l_index4"));
+  EXPECT_FALSE(is_hanim_joint_name("vl0"));
+  EXPECT_TRUE(is_hanim_joint_name("r_index0"));
+  EXPECT_TRUE(is_hanim_joint_name("r_tarsometatarsal_2"));
+  EXPECT_TRUE(is_hanim_joint_name("l_eyeball_joint"));
+  EXPECT_FALSE(is_hanim_joint_name("l_thumb0"));
+}
+
+// `strata info`'s stature on the shipped default (skull_tip) and on a skeleton without a skull site.
+TEST(RestStature, FromTheSkullTipElseTheTopJointPlusAHead) {
+  const Skeleton s = load_default_humanoid().skeleton;
+  const RestStature st = rest_stature(s);
+  EXPECT_STREQ(st.source, "skull_tip");
+  EXPECT_GT(st.metres, 1.6f);
+  EXPECT_LT(st.metres, 1.9f);
+  const Skeleton bare = load_humanoid_text(std::string(kOpen) +
+                                               "<HAnimJoint name='HumanoidRoot' center='0 1 0'>\n"
+                                               "<HAnimJoint name='skullbase' center='0 1.6 0'/>\n"
+                                               "<HAnimJoint name='l_ankle' center='0.1 0.1 0'/></HAnimJoint>\n" +
+                                               kClose,
+                                           "bare.x3d")
+                           .skeleton;
+  EXPECT_NEAR(rest_stature(bare).metres, 1.6f + 0.13f - 0.1f, 1e-5f);
+  EXPECT_STREQ(rest_stature(bare).source, "joints");
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // retargets to the same clip as the original.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +15,8 @@
 
 #include "io/bvh.h"
 #include "io/hanim_loader.h"
+#include "io/load_error.h"
+#include "io/retarget_map_file.h"
 #include "motion/bvh_naming.h"
 #include "motion/retarget.h"
 
@@ -145,6 +148,45 @@ float angle_deg(const glm::quat& a, const glm::quat& b) {
   return static_cast<float>(glm::degrees(2.0 * std::atan2(std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z), std::abs(d.w))));
 }
 
+// The worst key-by-key angle between two retargets of one capture (same tracks in the same order), and the worst
+// root translation difference.
+void expect_same_clip(const RetargetResult& r, const RetargetResult& reference) {
+  ASSERT_EQ(r.clip.rotations.size(), reference.clip.rotations.size());
+  float worst = 0.0f;
+  for (std::size_t t = 0; t < r.clip.rotations.size(); ++t) {
+    const RotationTrack& a = r.clip.rotations[t];
+    const RotationTrack& b = reference.clip.rotations[t];
+    ASSERT_EQ(a.joint, b.joint);
+    ASSERT_EQ(a.values.size(), b.values.size());
+    for (std::size_t k = 0; k < a.values.size(); ++k) worst = std::max(worst, angle_deg(a.values[k], b.values[k]));
+  }
+  EXPECT_LT(worst, 0.05f) << "degrees, worst key";
+  const TranslationTrack& root = r.clip.translations.at(0);
+  const TranslationTrack& root_ref = reference.clip.translations.at(0);
+  ASSERT_EQ(root.values.size(), root_ref.values.size());
+  float worst_root = 0.0f;
+  for (std::size_t k = 0; k < root.values.size(); ++k)
+    worst_root = std::max(worst_root, glm::length(root.values[k] - root_ref.values[k]));
+  EXPECT_LT(worst_root, 5e-4f) << "metres";
+  EXPECT_EQ(r.contacts.legs[0].size(), reference.contacts.legs[0].size());
+}
+
+// Every joint renamed to a meaningless "b<index>", so no family matches.
+Variant meaningless_names(const BvhMotion& m, bool z_up) {
+  Variant v;
+  v.label = z_up ? "meaningless-z-up" : "meaningless";
+  for (std::size_t j = 1; j < m.joint_count(); ++j) v.names[m.joints[j].name] = std::to_string(j).insert(0, 1, 'b');
+  v.root = "b0";
+  v.z_up = z_up;
+  v.units = "centimetres";
+  return v;
+}
+
+std::string renamed(const std::string& poser, const BvhMotion& m) {
+  const std::int32_t j = m.find_joint(poser);
+  return j < 0 ? poser : std::to_string(j).insert(0, 1, 'b');
+}
+
 class BvhFamilies : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -174,24 +216,78 @@ TEST_F(BvhFamilies, EveryFamilyRetargetsToTheSameClipAsThePoserOriginal) {
     EXPECT_NEAR(naming.stature * naming.metres_per_unit, 1.6, 0.15);
     const RetargetResult r = retarget_bvh(m, skeleton);
     EXPECT_EQ(r.family, v.family);
-    ASSERT_EQ(r.clip.rotations.size(), reference.clip.rotations.size());
-    float worst = 0.0f;
-    for (std::size_t t = 0; t < r.clip.rotations.size(); ++t) {
-      const RotationTrack& a = r.clip.rotations[t];
-      const RotationTrack& b = reference.clip.rotations[t];
-      ASSERT_EQ(a.joint, b.joint);
-      ASSERT_EQ(a.values.size(), b.values.size());
-      for (std::size_t k = 0; k < a.values.size(); ++k) worst = std::max(worst, angle_deg(a.values[k], b.values[k]));
+    expect_same_clip(r, reference);
+  }
+}
+
+// Names no family uses: the skeleton's shape alone finds the same joints as the Poser names (the same map, row for
+// row), in Y-up and in Z-up, and the capture retargets to the same clip.
+TEST_F(BvhFamilies, UnknownNamesAreMappedByTheSkeletonsShape) {
+  const BvhMotion original = load_bvh_file(kWalk);
+  const Skeleton skeleton = load_default_humanoid().skeleton;
+  const BvhNaming by_name = recognise_bvh_naming(original);
+  const RetargetResult reference = retarget_bvh(original, skeleton);
+  for (const bool z_up : {false, true}) {
+    const Variant v = meaningless_names(original, z_up);
+    SCOPED_TRACE(v.label);
+    const BvhMotion m = load_bvh_text(write_variant(original, v), v.label + ".bvh");
+    const BvhNaming naming = recognise_bvh_naming(m);
+    EXPECT_EQ(naming.family, "by shape (names not recognised)");
+    EXPECT_EQ(naming.units, "centimetres");
+    ASSERT_EQ(naming.map.size(), by_name.map.size());
+    for (std::size_t r = 0; r < naming.map.size(); ++r) {
+      SCOPED_TRACE(by_name.map[r].hanim);
+      EXPECT_EQ(naming.map[r].hanim, by_name.map[r].hanim);
+      EXPECT_EQ(naming.map[r].bvh, renamed(by_name.map[r].bvh, original));
+      EXPECT_EQ(naming.map[r].bvh_aim, renamed(by_name.map[r].bvh_aim, original));
     }
-    EXPECT_LT(worst, 0.05f) << "degrees, worst key";
-    const TranslationTrack& root = r.clip.translations.at(0);
-    const TranslationTrack& root_ref = reference.clip.translations.at(0);
-    ASSERT_EQ(root.values.size(), root_ref.values.size());
-    float worst_root = 0.0f;
-    for (std::size_t k = 0; k < root.values.size(); ++k)
-      worst_root = std::max(worst_root, glm::length(root.values[k] - root_ref.values[k]));
-    EXPECT_LT(worst_root, 5e-4f) << "metres";
-    EXPECT_EQ(r.contacts.legs[0].size(), reference.contacts.legs[0].size());
+    expect_same_clip(retarget_bvh(m, skeleton), reference);
+  }
+}
+
+// A map file names the joints instead; rows aim and axes turn as for a recognised family.
+TEST_F(BvhFamilies, AMapFileRetargetsWhatNoNameOrShapeRuleReads) {
+  const BvhMotion original = load_bvh_file(kWalk);
+  const Skeleton skeleton = load_default_humanoid().skeleton;
+  const BvhNaming by_name = recognise_bvh_naming(original);
+  const RetargetResult reference = retarget_bvh(original, skeleton);
+  const Variant v = meaningless_names(original, true);
+  const BvhMotion m = load_bvh_text(write_variant(original, v), "mapped.bvh");
+  std::string text = "# BVH joint, H-Anim joint\n";
+  for (const RetargetMapping& row : by_name.map)
+    if (row.hanim != "l_midtarsal" && row.hanim != "r_midtarsal") text += renamed(row.bvh, original) + " " + row.hanim + "\n";
+  const BvhNaming naming = bvh_naming_from_map(m, parse_retarget_map(text, "lab.map"));
+  EXPECT_EQ(naming.family, "map lab.map");
+  EXPECT_EQ(naming.axes * glm::vec3(0, 0, 1), glm::vec3(0, 1, 0));  // the file's +Z is up
+  RetargetOptions options;
+  options.map = naming.map;
+  options.axes = naming.axes;
+  options.family = naming.family;
+  const RetargetResult r = retarget_bvh(m, skeleton, options);
+  EXPECT_EQ(r.family, "map lab.map");
+  expect_same_clip(r, reference);
+
+  // A row naming a joint the capture lacks, and rows that do not hang one below the other.
+  try {
+    (void)bvh_naming_from_map(m, parse_retarget_map(text + "nosuch l_midtarsal\n", "lab.map"));
+    ADD_FAILURE();
+  } catch (const LoadError& e) {
+    const std::string line = std::to_string(std::count(text.begin(), text.end(), '\n') + 1);
+    EXPECT_NE(std::string(e.what()).find("lab.map:" + line + ": mapped.bvh has no joint 'nosuch'"), std::string::npos)
+        << e.what();
+  }
+  std::string swapped = text;
+  const std::string knee = renamed("lShin", original), ankle = renamed("lFoot", original);
+  swapped.replace(swapped.find(knee + " l_knee"), knee.size(), "@");
+  swapped.replace(swapped.find(ankle + " l_ankle"), ankle.size(), knee);
+  swapped.replace(swapped.find("@ l_knee"), 1, ankle);
+  try {
+    (void)bvh_naming_from_map(m, parse_retarget_map(swapped, "lab.map"));
+    ADD_FAILURE();
+  } catch (const LoadError& e) {
+    EXPECT_NE(std::string(e.what()).find("lab.map: '" + knee + "' does not hang from '" + ankle + "'"),
+              std::string::npos)
+        << e.what();
   }
 }
 
