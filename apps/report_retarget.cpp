@@ -29,6 +29,7 @@
 #include "scene/scene_setup.h"
 #include "scene/step.h"
 #include "systems/ik.h"
+#include "systems/mocap_drive.h"
 
 namespace strata::cli {
 namespace {
@@ -90,11 +91,14 @@ int run_retarget_report(const RetargetReportOptions& o) {
     std::vector<glm::vec3> bvh_pos(motion.joint_count());
     Profiler profiler(120, false);
     std::size_t samples = 0;
-    // Foot locks: a locked ankle's world position against where it was when the lock began.
+    // Foot locks: a locked foot's contact point (heel, then ball; systems/mocap_drive.h) in the world, against
+    // where it was when that contact began.
     const std::int32_t ankles[2] = {scene->limbs().size() > kRightLeg ? scene->limbs()[kLeftLeg].lower : -1,
                                     scene->limbs().size() > kRightLeg ? scene->limbs()[kRightLeg].lower : -1};
+    const MocapRig& mocap_rig = *scene->motion.mocap_rig;
     struct Lock {
       int interval = -1;
+      float point = -1.0f;
       glm::dvec3 start{0.0};
     } locks[2];
     double slide_max = 0.0;
@@ -129,14 +133,19 @@ int run_retarget_report(const RetargetReportOptions& o) {
         const float* lock = lanes.foot_lock + static_cast<std::size_t>(leg) * kLockFloats * lanes.stride;
         const bool on = lock[kLockOn * lanes.stride] > 0.5f;
         const int interval = static_cast<int>(lock[kLockInterval * lanes.stride]);
-        glm::vec3 ankle;
-        for (int c = 0; c < 3; ++c)
-          ankle[c] = lanes.at(lanes.world, static_cast<std::size_t>(ankles[leg]) * 12 + 9 + static_cast<std::size_t>(c))[0];
-        const glm::dvec3 world(place.point(ankle));
+        const float point = lock[kLockPoint * lanes.stride];
+        // The ankle's world matrix from FK (3x4 column-major, components/walker.h) carries the contact point.
+        float m[kAffineFloats];
+        for (std::uint32_t c = 0; c < kAffineFloats; ++c)
+          m[c] = lanes.at(lanes.world, static_cast<std::size_t>(ankles[leg]) * kAffineFloats + c)[0];
+        const glm::vec3 offset = point == kContactBall ? mocap_rig.ball_offset[leg] : mocap_rig.heel_offset[leg];
+        const glm::vec3 contact = glm::vec3(m[9], m[10], m[11]) + offset.x * glm::vec3(m[0], m[1], m[2]) +
+                                  offset.y * glm::vec3(m[3], m[4], m[5]) + offset.z * glm::vec3(m[6], m[7], m[8]);
+        const glm::dvec3 world(place.point(contact));
         if (!on) {
           locks[leg].interval = -1;
-        } else if (locks[leg].interval != interval) {
-          locks[leg] = {interval, world};
+        } else if (locks[leg].interval != interval || locks[leg].point != point) {
+          locks[leg] = {interval, point, world};
         } else {
           slide_max = std::max(slide_max, glm::length(world - locks[leg].start));
           ++locked_frames;
@@ -171,6 +180,9 @@ int run_retarget_report(const RetargetReportOptions& o) {
     std::printf("  worst mean %.2f deg (target <= %.0f), worst max %.2f deg at %s (target <= %.0f): %s\n", worst_mean,
                 kMeanTargetDeg, worst_max, worst_bone.c_str(), kMaxTargetDeg, pass ? "met" : "NOT met");
     std::printf("  foot-lock slide max %.3f mm over %zu locked leg-frames\n", slide_max * 1000.0, locked_frames);
+    std::string missing;
+    for (const std::string& m : capture.missing_on_rig) missing += (missing.empty() ? "" : " ") + m;
+    if (!missing.empty()) std::printf("  not on this rig (left out): %s\n", missing.c_str());
     if (!o.json.empty()) {
       const nlohmann::json report = {
           {"motion", scene_options.motion},
@@ -184,6 +196,7 @@ int run_retarget_report(const RetargetReportOptions& o) {
           {"worst_bone", worst_bone},
           {"foot_lock_slide_mm_max", slide_max * 1000.0},
           {"locked_leg_frames", locked_frames},
+          {"missing_on_rig", capture.missing_on_rig},
           {"targets", {{"mean_deg", kMeanTargetDeg}, {"max_deg", kMaxTargetDeg}}},
           {"targets_met", pass}};
       write_json_file(o.json, report);

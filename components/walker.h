@@ -59,9 +59,10 @@ inline constexpr std::uint32_t kGaitFloats = kGaitLegs + 2 * kLegFloats;
 // Foot locks of a mocap-driven walker (systems/mocap_drive.h), per leg: component kLock* + leg * kLockFloats.
 // New rows read -1 everywhere: unlocked, in no stance interval.
 enum FootLockComponent : std::uint32_t {
-  kLockOn,        // > 0.5 while the ankle is held at (x, y, z)
+  kLockOn,        // > 0.5 while the foot's contact point is held at (x, y, z)
   kLockInterval,  // index of the clip's stance interval the lock belongs to, -1 in swing
-  kLockX, kLockY, kLockZ,  // held ankle position, world
+  kLockX, kLockY, kLockZ,  // held contact point, world
+  kLockPoint,     // which point of the foot is held: kContactHeel (0) until the foot rolls onto kContactBall (1)
   kLockFloats
 };
 

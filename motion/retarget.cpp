@@ -36,6 +36,36 @@ glm::vec3 hanim_point(const Skeleton& s, const std::string& name) {
   throw std::invalid_argument("retarget: skeleton has no joint or site '" + name + "'");
 }
 
+// Where H-Anim joint h's bone points at rest: at `aim` (a joint or site) where the skeleton has it. Many real
+// skeletons lack the default's sites (Joe has no l_hand_tip) or joints (Humanoid1 has no l_midtarsal): then at the
+// child of h nearest its children's mean direction (the middle finger of a hand, the toe of a foot), and a joint
+// with no child continues its parent's bone (a foot without one points forward, +Z).
+glm::vec3 bone_aim_point(const Skeleton& s, std::int32_t h, const std::string& aim) {
+  if (s.find_joint(aim) >= 0 || s.find_site(aim) >= 0) return hanim_point(s, aim);
+  const glm::vec3 from = s.centers[h];
+  std::vector<glm::vec3> directions;
+  for (std::size_t c = static_cast<std::size_t>(h) + 1; c < s.joint_count(); ++c)
+    if (s.parents[c] == h && glm::length(s.centers[c] - from) > 1e-6f) directions.push_back(s.centers[c] - from);
+  if (!directions.empty()) {
+    glm::vec3 mean(0.0f);
+    for (const glm::vec3& d : directions) mean += glm::normalize(d);
+    const glm::vec3* best = &directions[0];
+    for (const glm::vec3& d : directions)
+      if (glm::dot(glm::normalize(d), mean) > glm::dot(glm::normalize(*best), mean)) best = &d;
+    return from + *best;
+  }
+  if (aim.find("forefoot_tip") != std::string::npos) return from + glm::vec3(0, 0, 0.1f);
+  const std::int32_t parent = s.parents[static_cast<std::size_t>(h)];
+  if (parent >= 0 && glm::length(from - s.centers[parent]) > 1e-6f) return from + (from - s.centers[parent]);
+  throw std::invalid_argument("retarget: skeleton has no joint or site '" + aim + "', and joint '" +
+                              s.joint_names[static_cast<std::size_t>(h)] + "' has no bone to aim along instead");
+}
+
+bool is_leg_or_root(std::string_view hanim) {
+  const std::string_view c = canonical_joint_name(hanim);
+  return c == "HumanoidRoot" || c.ends_with("_hip") || c.ends_with("_knee") || c.ends_with("_ankle");
+}
+
 // A point fixed to joint j's segment (rest position `rest`), in the posed humanoid space.
 glm::vec3 posed_point(const Skeleton& s, std::span<const glm::quat> rot, std::span<const glm::vec3> pos, std::int32_t j,
                       const glm::vec3& rest) {
@@ -144,11 +174,19 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
 
   // Resolve the map and each row's alignment rotation once.
   std::vector<RetargetBone> bones;
+  std::vector<std::string> skipped_on_rig;
   std::vector<RetargetBone> row_of(hj);
   std::vector<std::int32_t> bvh_of(hj, -1);
   for (const RetargetMapping& m : map) {
     const std::int32_t b = motion.find_joint(m.bvh);
     const std::int32_t h = skeleton.find_joint(m.hanim);
+    // The rig may lack a spine, neck, collar or arm joint the 25-joint skeleton has (Humanoid1 has no vt6): that
+    // row is left out, and the joints below it take the capture's global rotations through their own rows. Only
+    // the root and the legs, which place the walker and carry the foot lock, are required of the rig.
+    if (h < 0 && b >= 0 && !is_leg_or_root(m.hanim)) {
+      skipped_on_rig.push_back(m.hanim);
+      continue;
+    }
     if (b < 0 || h < 0) {
       if (!m.required) continue;
       throw std::invalid_argument("retarget: map row " + m.bvh + " -> " + m.hanim + ": " +
@@ -176,7 +214,7 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
         if (aim < 0) throw std::invalid_argument("retarget: " + motion.source + " has no joint '" + m.bvh_aim + "'");
         bvh_dir = bvh_rest[aim] - bvh_rest[b];
       }
-      const glm::vec3 hanim_dir = hanim_point(skeleton, m.hanim_aim) - skeleton.centers[h];
+      const glm::vec3 hanim_dir = bone_aim_point(skeleton, h, m.hanim_aim) - skeleton.centers[h];
       bone.align = rotation_between(hanim_dir, bvh_dir);
       bone.aimed = true;
       bone.hanim_dir = glm::normalize(hanim_dir);
@@ -290,6 +328,7 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
   result.family = naming.family;
   result.axes = axes;
   result.bones = std::move(bones);
+  result.missing_on_rig = std::move(skipped_on_rig);
   const float dt = motion.frame_time;
   AnimationClip& clip = result.clip;
   clip.name = motion.source.empty() ? std::string("mocap") : motion.source;

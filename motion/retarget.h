@@ -103,6 +103,7 @@ struct RetargetResult {
   glm::mat3 axes{1.0f};         // the file's axes -> H-Anim's, applied to every frame
   std::vector<RetargetBone> bones;  // the map as resolved, in map order
   std::vector<std::string> unmapped_hanim;  // H-Anim joints that got no track (identity local rotation)
+  std::vector<std::string> missing_on_rig;  // map rows left out because the rig lacks the joint (e.g. vt6)
   // Total horizontal root travel over the clip (last key - first key), metres.
   glm::vec3 root_travel{0.0f};
 };

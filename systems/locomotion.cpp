@@ -685,8 +685,26 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
   rig.root = 0;
   rig.sacroiliac = need("sacroiliac");
   rig.spine = skeleton.find_joint("vl5");
-  rig.ball[0] = need("l_midtarsal");
-  rig.ball[1] = need("r_midtarsal");
+  // The ball of the foot, where the toes break: H-Anim 1.1's midtarsal (2019's transversetarsal) in the shipped
+  // skeleton; a 2019 figure without it (Humanoid1 goes ankle -> metatarsophalangeal_2) breaks at the second toe's
+  // MTP joint, and any other at the first joint below the ankle that lies 3 cm or more ahead of it.
+  for (int leg = 0; leg < 2; ++leg) {
+    const std::string side = leg == 0 ? "l_" : "r_";
+    std::int32_t ball = -1;
+    for (const char* stem : {"midtarsal", "metatarsophalangeal_2", "tarsometatarsal_2"})
+      if (ball < 0) ball = skeleton.find_joint(side + stem);
+    const std::int32_t ankle = rig.limbs[leg == 0 ? kLeftLeg : kRightLeg].lower;
+    for (std::size_t c = static_cast<std::size_t>(ankle) + 1; ball < 0 && c < skeleton.joint_count(); ++c) {
+      std::int32_t up = skeleton.parents[c];
+      while (up > ankle) up = skeleton.parents[static_cast<std::size_t>(up)];
+      if (up == ankle && skeleton.centers[c].z - skeleton.centers[ankle].z >= 0.03f) ball = static_cast<std::int32_t>(c);
+    }
+    if (ball < 0)
+      throw std::invalid_argument("locomotion: skeleton '" + skeleton.name + "' has no " + side + "midtarsal (nor " +
+                                  side + "metatarsophalangeal_2, nor any joint below " +
+                                  skeleton.joint_names[static_cast<std::size_t>(ankle)] + " ahead of it)");
+    rig.ball[leg] = ball;
+  }
   rig.sacro_center = skeleton.centers[rig.sacroiliac];
   if (skeleton.parents[rig.limbs[kLeftLeg].upper] != rig.sacroiliac ||
       skeleton.parents[rig.limbs[kRightLeg].upper] != rig.sacroiliac)

@@ -10,6 +10,7 @@
 
 #include "components/walker.h"
 #include "systems/animation_sample.h"
+#include "systems/locomotion.h"
 
 namespace strata {
 
@@ -38,6 +39,12 @@ MocapRig make_mocap_rig(const Skeleton& skeleton, const AnimationClip& clip, con
     }
     rig.reach[leg] = longest * kMocapReachFraction;
   }
+  // The contacts as the walk generator places them (its ball falls back past a missing midtarsal).
+  const LocomotionRig walk = make_locomotion_rig(skeleton);
+  for (int leg = 0; leg < 2; ++leg) {
+    rig.heel_offset[leg] = walk.heel_rest[leg] - walk.ankle_rest[leg];
+    rig.ball_offset[leg] = walk.ball_rest[leg] - walk.ankle_rest[leg];
+  }
   for (const TranslationTrack& t : clip.translations) {
     if (t.joint != 0 || t.values.size() < 2) continue;
     rig.loop_displacement = t.values.back() - t.values.front();
@@ -58,6 +65,8 @@ struct LockRef {
   void set_locked(bool on) const { at(kLockOn) = on ? 1.0f : 0.0f; }
   int interval() const { return static_cast<int>(at(kLockInterval)); }
   void set_interval(int i) const { at(kLockInterval) = static_cast<float>(i); }
+  float point() const { return at(kLockPoint); }
+  void set_point(float which) const { at(kLockPoint) = which; }
   glm::vec3 world() const { return {at(kLockX), at(kLockY), at(kLockZ)}; }
   void set_world(const glm::vec3& p) const {
     at(kLockX) = p.x;
@@ -149,27 +158,37 @@ bool MocapDriveJob::run() const {
         continue;
       }
       const std::int32_t ankle = ankles[leg];
+      const glm::quat q = global[ankle];
+      const glm::vec3 heel = pos[ankle] + q * rig.heel_offset[leg];
+      const glm::vec3 ball = pos[ankle] + q * rig.ball_offset[leg];
+      // World <-> this frame's humanoid space; the placement may have moved since the lock (a wrap never keeps
+      // one, but a caller may move walkers).
+      auto to_world = [&](const glm::vec3& p) { return origin + heading * (p * scale); };
+      auto to_humanoid = [&](const glm::vec3& w) {
+        return glm::inverse(heading) * (w - origin) / (scale != 0.0f ? scale : 1.0f);
+      };
       if (s.interval() != interval) {
         s.set_locked(true);
         s.set_interval(interval);
-        s.set_world(origin + heading * (pos[ankle] * scale));
+        const bool on_ball = ball.y < heel.y;  // a stance that begins flat or on the toes
+        s.set_point(on_ball ? kContactBall : kContactHeel);
+        s.set_world(to_world(on_ball ? ball : heel));
+      } else if (s.locked() && s.point() == kContactHeel && ball.y < heel.y) {
+        // Rolled onto the ball: hold it where the held foot puts it now, so the ankle does not jump.
+        s.set_point(kContactBall);
+        s.set_world(to_world(to_humanoid(s.world()) + (ball - heel)));
       }
-      // Release (for the rest of this stance) once the lock is out of the leg's reach from where the clip puts the
-      // hip: late in stance the body has moved on and the capture's ankle lifts for push-off, so an ankle held at
-      // its landing spot would need a longer leg. IK would clamp and flag it, leaving the foot off its lock anyway;
-      // releasing hands the foot back to the clip instead of a stretched, clamped leg.
-      if (s.locked()) {
-        const glm::vec3 held = glm::inverse(heading) * (s.world() - origin) / (scale != 0.0f ? scale : 1.0f);
-        if (glm::length(held - pos[rig.limbs[leg].upper]) > rig.reach[leg]) s.set_locked(false);
-      }
+      const glm::vec3 contact = s.point() == kContactBall ? ball : heel;
+      const glm::vec3 h = to_humanoid(s.world()) + (pos[ankle] - contact);
+      // Release (for the rest of this stance) once the ankle goal is out of the leg's reach from where the clip
+      // puts the hip: late in stance the body has moved on and the capture's foot lifts for push-off. IK would
+      // clamp and flag it, leaving the foot off its lock anyway; releasing hands the foot back to the clip instead
+      // of a stretched, clamped leg.
+      if (s.locked() && glm::length(h - pos[rig.limbs[leg].upper]) > rig.reach[leg]) s.set_locked(false);
       if (!s.locked()) {
         set_mode(IkMode::Off);
         continue;
       }
-      // World -> this frame's humanoid space; the placement may have moved since the lock (a wrap never keeps one,
-      // but a caller may move walkers).
-      const glm::vec3 h = glm::inverse(heading) * (s.world() - origin) / (scale != 0.0f ? scale : 1.0f);
-      const glm::quat q = global[ankle];
       set(kGoalPx, h.x);
       set(kGoalPy, h.y);
       set(kGoalPz, h.z);

@@ -33,7 +33,13 @@ struct MocapRig {
   std::vector<LimbChain> limbs;
   glm::vec3 loop_displacement{0.0f};
   float reach[2] = {0.0f, 0.0f};  // per leg: the farthest hip-ankle distance a lock may need (see below)
+  // Per leg, the foot's two ground contacts relative to the ankle in the rest pose (humanoid axes): the heel's
+  // underside and the ball (systems/locomotion.h's heel_rest and ball_rest). They ride on the ankle's frame.
+  glm::vec3 heel_offset[2] = {glm::vec3(0.0f), glm::vec3(0.0f)};
+  glm::vec3 ball_offset[2] = {glm::vec3(0.0f), glm::vec3(0.0f)};
 };
+inline constexpr float kContactHeel = 0.0f;
+inline constexpr float kContactBall = 1.0f;
 // A lock is released once it is farther from the hip than this fraction of the leg's longest reach (knee as
 // straight as its limit allows): 0.5 % short of the shell keeps the solve exact rather than clamped.
 inline constexpr float kMocapReachFraction = 0.995f;
@@ -41,11 +47,16 @@ MocapRig make_mocap_rig(const Skeleton& skeleton, const AnimationClip& clip, con
 
 // For every walker: clock += dt * rate, wrapped into [0, duration) with the walker's placement advanced by the
 // loop's root displacement (rotated by its heading, times its scale) per wrap; the clip sampled into the local
-// rotations and root translation; and per leg in stance an IK goal at the ankle position captured when the stance
-// began (held in world space, converted to the walker's humanoid space every frame), with the clip's ankle
-// orientation (mode PositionOrientation); mode Off in swing and for the arms. A lock is released for the rest of
-// its stance once it leaves the leg's reach (see kMocapReachFraction); the foot then follows the clip (no blend). A wrap releases the locks: the clip
-// is not a seamless cycle, so a lock from the previous loop's last frames would not fit the next loop's pose.
+// rotations and root translation; and per leg in stance an IK goal (mode PositionOrientation, the clip's ankle
+// orientation) that holds the foot's contact point where it touched down. The contact is the heel from heel strike
+// until the clip's ball sinks below its heel (foot flat onward), then the ball, re-anchored where the held foot puts
+// it, so the switch is seamless. The ankle goal is the held point plus the clip's ankle-from-contact offset: the
+// ankle rolls over the heel and then over the ball as captured, and only the contact point is pinned. Holding the
+// ankle where it landed was the first design; it made IK bend the knee up to 10 deg away from the capture while
+// the captured ankle rolled forward over the heel. Mode Off in swing and for the arms. A lock is released for the
+// rest of its stance once the ankle goal leaves the leg's reach (see kMocapReachFraction); the foot then follows the
+// clip (no blend). A wrap releases the locks: the clip is not a seamless cycle, so a lock from the previous loop's
+// last frames would not fit the next loop's pose.
 // The lock state lives in the walker's foot_lock columns (components/walker.h), so it moves with the walker
 // when the table swap-removes. Walkers run one after another (as before the job: ~1 us each).
 struct MocapDriveJob {

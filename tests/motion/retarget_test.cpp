@@ -301,11 +301,13 @@ TEST_F(RetargetWalk, MocapDriveLocksFeetAcrossLoops) {
     bool locked = false;
     int interval = -1;
     glm::vec3 world{0.0f};
+    float point = -1.0f;
   };
   auto lock_of = [&](std::size_t w, int leg) {
     auto c = [&](std::uint32_t k) { return lanes.at(lanes.foot_lock, static_cast<std::size_t>(leg) * kLockFloats + k)[w]; };
-    return Lock{c(kLockOn) > 0.5f, static_cast<int>(c(kLockInterval)), {c(kLockX), c(kLockY), c(kLockZ)}};
+    return Lock{c(kLockOn) > 0.5f, static_cast<int>(c(kLockInterval)), {c(kLockX), c(kLockY), c(kLockZ)}, c(kLockPoint)};
   };
+  std::size_t rolled_onto_ball = 0;
   std::vector<Lock> previous(6);
   std::size_t locked_frames = 0;
   float worst = 0.0f;
@@ -324,17 +326,27 @@ TEST_F(RetargetWalk, MocapDriveLocksFeetAcrossLoops) {
         const Lock now = lock_of(w, leg);
         Lock& before = previous[w * 2 + leg];
         if (now.locked && before.locked && now.interval == before.interval) {
-          // The ankle's world position from FK's world matrix F(ankle) (its translation column) and the placement.
-          glm::vec3 ankle;
-          for (int c = 0; c < 3; ++c)
-            ankle[c] = lanes.at(lanes.world, static_cast<std::size_t>(ankles[leg]) * kAffineFloats + 9 + c)[w];
-          const glm::vec3 world = origin + heading * (ankle * scale);
-          const float error = glm::length(world - before.world);
+          // The held contact point (heel, then ball) from FK's world matrix F(ankle) and the placement.
+          float m[kAffineFloats];
+          for (std::uint32_t c = 0; c < kAffineFloats; ++c)
+            m[c] = lanes.at(lanes.world, static_cast<std::size_t>(ankles[leg]) * kAffineFloats + c)[w];
+          const glm::vec3 offset = now.point == kContactBall ? rig.ball_offset[leg] : rig.heel_offset[leg];
+          const glm::vec3 contact = glm::vec3(m[9], m[10], m[11]) + offset.x * glm::vec3(m[0], m[1], m[2]) +
+                                    offset.y * glm::vec3(m[3], m[4], m[5]) + offset.z * glm::vec3(m[6], m[7], m[8]);
+          const glm::vec3 world = origin + heading * (contact * scale);
+          const float error = glm::length(world - now.world);
           worst = std::max(worst, error);
           EXPECT_LT(error, 1e-3f) << "walker " << w << " leg " << leg << " step " << step << " flags "
                                   << lanes.ik_flags[leg * lanes.stride + w] << " ik error "
                                   << lanes.at(lanes.ik_result, leg * kIkResultFloats)[w];
-          EXPECT_EQ(now.world, before.world) << "the lock itself never moves";
+          if (now.point == before.point) {
+            EXPECT_EQ(now.world, before.world) << "the lock itself moves only when the foot rolls onto its ball";
+          } else {
+            // Heel to ball, never back; the ball is held where the held foot put it, so nothing jumps.
+            EXPECT_EQ(before.point, kContactHeel);
+            EXPECT_EQ(now.point, kContactBall);
+            ++rolled_onto_ball;
+          }
           ++locked_frames;
         }
         before = now;
@@ -343,6 +355,7 @@ TEST_F(RetargetWalk, MocapDriveLocksFeetAcrossLoops) {
   }
   RecordProperty("worst_locked_foot_error_m", std::to_string(worst));
   EXPECT_GT(locked_frames, static_cast<std::size_t>(steps));  // both legs of 3 walkers: plenty of stance frames
+  EXPECT_GT(rolled_onto_ball, 6u);  // most stances roll from the heel onto the ball
   // Three wraps later walker 0 (heading 0) is about three loop displacements further along +Z, not back at the start.
   const glm::vec3 end0(lanes.at(lanes.placement, 0)[0], 0.0f, lanes.at(lanes.placement, 2)[0]);
   EXPECT_NEAR(glm::length(end0 - start0), 3.0f * glm::length(rig.loop_displacement), 1e-3f);
