@@ -70,6 +70,7 @@ int run_other_info(const std::string& path, InputFormatId format) {
       for (const AnimationClip& c : rig.clips)
         std::cout << "  " << c.name << ": " << c.duration << " s, " << c.rotations.size() << " rotation + "
                   << c.translations.size() << " translation channels\n";
+      for (const std::string& w : rig.skeleton.warnings) std::cout << "warning:    " << w << "\n";
     }
   } catch (const std::exception& e) {
     print_error("info", error_text(e));

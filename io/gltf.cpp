@@ -1,5 +1,7 @@
 #include "io/gltf.h"
 
+#include "components/humanoid_shape.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -108,8 +110,48 @@ class GltfReader {
     read_mesh(model_.meshes[skinned.mesh], body);
     if (!model_.animations.empty()) bake_animation(model_.animations[0], body);
     body.skeleton = skeleton_;
+    face_plus_z(body);
     validate_mesh(body.mesh, name_);
     return body;
+  }
+
+  // H-Anim's figure faces +Z with its left at +X, and the engine's limbs (knee flexion about +X), the walk
+  // generator and the cameras assume it. glTF says only that +Y is up: CesiumMan faces +X. A humanoid rig (one with
+  // l_hip and r_hip, by name or by shape) is turned about +Y until its left hip is at +X: positions, normals and
+  // centres rotated, root translation keys rotated and rotation keys conjugated (exact: the turn is rigid).
+  // Within 0.1 rad of a quarter turn the turn is snapped to it, so the usual cases keep exact coordinates.
+  void face_plus_z(ImportedBody& body) {
+    Skeleton& s = body.skeleton;
+    const std::int32_t l_hip = s.find_joint("l_hip"), r_hip = s.find_joint("r_hip");
+    if (l_hip < 0 || r_hip < 0) return;
+    const glm::vec3 left = s.centers[l_hip] - s.centers[r_hip];
+    if (!(left.x * left.x + left.z * left.z > 1e-8f)) return;
+    float angle = std::atan2(left.z, left.x);
+    const float quarter = 1.57079633f;
+    const float snapped = std::round(angle / quarter) * quarter;
+    if (std::abs(angle - snapped) < 0.1f) angle = snapped;
+    if (std::abs(angle) < 1e-6f) return;
+    const glm::quat turn = glm::angleAxis(angle, glm::vec3(0, 1, 0));
+    auto rotate = [&](const glm::vec3& v) {
+      glm::vec3 r = turn * v;
+      // Quarter turns: drop the rounding noise of sin/cos so that x = 0.3 comes back as exactly 0.3, not 0.29999998.
+      if (angle == snapped)
+        for (int c = 0; c < 3; ++c) r[c] = std::abs(r[c]) < 1e-7f * (glm::length(v) + 1.0f) ? 0.0f : r[c];
+      return r;
+    };
+    for (glm::vec3& p : body.mesh.positions) p = rotate(p);
+    for (glm::vec3& n : body.mesh.normals) n = rotate(n);
+    for (glm::vec3& c : s.centers) c = rotate(c);
+    for (SkeletonSite& site : s.sites) site.position = rotate(site.position);
+    for (AnimationClip& clip : body.clips) {
+      for (TranslationTrack& t : clip.translations)
+        for (glm::vec3& v : t.values) v = rotate(v);
+      for (RotationTrack& t : clip.rotations)
+        for (glm::quat& q : t.values) q = glm::normalize(turn * q * glm::conjugate(turn));
+    }
+    body.facing_turn = turn;
+    body.warnings.push_back(name_ + ": turned " + std::to_string(static_cast<int>(std::lround(glm::degrees(angle)))) +
+                            " deg about +Y to face +Z (H-Anim's forward)");
   }
 
  private:
@@ -440,6 +482,10 @@ class GltfReader {
       joint_of_skin_[k] = j;
       for (auto c = children[k].rbegin(); c != children[k].rend(); ++c) stack.emplace_back(*c, j);
     }
+    // A skin's joints carry the exporter's names, or none (CesiumMan): where they are not H-Anim's, the limbs, the
+    // walk generator and retargeting find them by the skeleton's shape (components/humanoid_shape.h). A skin that
+    // is no humanoid (RiggedSimple's two-bone cylinder) keeps its names and plays its own clips.
+    name_joints_by_shape(s);
   }
 
   void read_mesh(const tinygltf::Mesh& gmesh, ImportedBody& body) {

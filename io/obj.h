@@ -27,6 +27,8 @@
 
 #include <glm/vec3.hpp>
 
+#include <glm/gtc/quaternion.hpp>
+
 #include "components/animation_clip.h"
 #include "components/mesh.h"
 #include "components/skeleton.h"
@@ -62,6 +64,9 @@ struct ImportedBody {
   SkinBinding skin;
   std::vector<AnimationClip> clips;
   std::vector<std::string> warnings;  // non-fatal findings, "file: message"
+  // The turn about +Y the loader applied so the figure faces +Z (io/gltf.cpp's face_plus_z); identity when none.
+  // The file's own space is facing_turn^-1 applied to what is here.
+  glm::quat facing_turn{1.0f, 0.0f, 0.0f, 0.0f};
 };
 
 }  // namespace strata

@@ -8,6 +8,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "components/humanoid_shape.h"
 #include "io/load_error.h"
 
 namespace strata {
@@ -252,144 +253,27 @@ std::vector<std::string> anatomy_by_name(const BvhMotion& motion, Anatomy& a, st
 }
 
 // ---- by shape ----------------------------------------------------------------------------------------------------
-// Names unknown: the skeleton read from its rest pose. The pelvis is the first joint from the root where three or
-// more chains branch; of its chains, the one that branches again (at the chest: neck and two arms) is the spine and
-// the two longest others are the legs. Down a leg, the thigh and shin are the two consecutive bones of greatest
-// total length (a CMU leg starts with a short hip bone, a Poser one with a buttock); the arm likewise (upper arm and
-// forearm; the bone before them is the collar). The neck is the chest's chain that rises the most; the head is
-// where the neck's single chain ends or branches (eyes). Left is the side the feet's up x forward points to; a
-// file whose feet show no forward direction is taken to face +Z, the BVH convention, and says so in its family.
-// Returns "" on success, else why the shape could not be read.
+// Names unknown: the skeleton read from its rest pose (components/humanoid_shape.h), the feet's End Sites giving the
+// forward direction. Returns "" on success, else why the shape could not be read.
 std::string anatomy_by_shape(const BvhMotion& motion, Anatomy& a, std::string& family) {
-  const auto children = children_of(motion);
-  const std::vector<glm::vec3> rest = motion.rest_positions();
-  const std::size_t n = motion.joint_count();
-  // Height of each joint's subtree in joints (a leaf is 1), from the leaves up (parents precede children).
-  std::vector<int> height(n, 1), size(n, 1);
-  for (std::size_t j = n; j-- > 0;)
-    for (const std::int32_t c : children[j]) {
-      height[j] = std::max(height[j], height[c] + 1);
-      size[j] += size[c];
-    }
-  auto first_branch = [&](std::int32_t from, std::size_t branches) {
-    for (std::int32_t j = from; j >= 0;) {
-      if (children[j].size() >= branches) return j;
-      if (children[j].size() != 1) return -1;
-      j = children[j][0];
-    }
-    return -1;
-  };
-  // Down the longest chain from `from`: the joints in order, and the end point (End Site or last joint).
-  auto chain_from = [&](std::int32_t from) {
-    std::vector<std::int32_t> chain;
-    for (std::int32_t j = from; j >= 0;) {
-      chain.push_back(j);
-      std::int32_t next = -1;
-      for (const std::int32_t c : children[j])
-        if (next < 0 || height[c] > height[next]) next = c;
-      j = next;
-    }
-    return chain;
-  };
-  // Index i of the two consecutive bones chain[i] -> chain[i+2] of greatest length; -1 when the chain is short.
-  auto longest_pair = [&](const std::vector<std::int32_t>& chain) {
-    int best = -1;
-    float best_len = 0.0f;
-    for (std::size_t i = 0; i + 2 < chain.size(); ++i) {
-      const float len = glm::length(rest[chain[i + 1]] - rest[chain[i]]) + glm::length(rest[chain[i + 2]] - rest[chain[i + 1]]);
-      if (len > best_len) best = static_cast<int>(i), best_len = len;
-    }
-    return best;
-  };
-
-  const std::int32_t pelvis = first_branch(0, 3);
-  if (pelvis < 0) return "no joint where the legs and the spine branch (three chains from one joint)";
-  std::int32_t spine_child = -1, chest = -1;
-  for (const std::int32_t c : children[pelvis]) {
-    const std::int32_t branch = first_branch(c, 3);
-    if (branch >= 0 && (spine_child < 0 || size[c] > size[spine_child])) spine_child = c, chest = branch;
+  std::vector<std::int32_t> parents(motion.joint_count());
+  std::vector<glm::vec3> tips = motion.rest_positions();
+  const std::vector<glm::vec3> rest = tips;
+  for (std::size_t j = 0; j < motion.joint_count(); ++j) {
+    parents[j] = motion.joints[j].parent;
+    if (motion.joints[j].has_end_site) tips[j] += motion.joints[j].end_site;
   }
-  if (spine_child < 0) return "no chain from the pelvis that branches into a neck and two arms";
-  std::vector<std::int32_t> legs;
-  for (const std::int32_t c : children[pelvis])
-    if (c != spine_child) legs.push_back(c);
-  std::sort(legs.begin(), legs.end(), [&](std::int32_t x, std::int32_t y) { return height[x] > height[y]; });
-  if (legs.size() < 2 || height[legs[1]] < 3) return "the pelvis has fewer than two chains of three joints (legs)";
-  legs.resize(2);
-
-  const glm::vec3 up_guess = rest[chest] - rest[pelvis];
-  if (!(glm::length(up_guess) > 0.0f)) return "the chest and the pelvis are at one point";
-  // The neck: the chest's chain whose joints lie highest above the chest.
-  std::int32_t neck = -1;
-  float neck_rise = -1e30f;
-  std::vector<std::int32_t> arms;
-  for (const std::int32_t c : children[chest]) {
-    glm::vec3 mean(0.0f);
-    const std::vector<std::int32_t> chain = chain_from(c);
-    for (const std::int32_t j : chain) mean += rest[j];
-    const float rise = glm::dot(mean / static_cast<float>(chain.size()) - rest[chest], up_guess);
-    if (rise > neck_rise) neck = c, neck_rise = rise;
-  }
-  for (const std::int32_t c : children[chest])
-    if (c != neck) arms.push_back(c);
-  std::sort(arms.begin(), arms.end(), [&](std::int32_t x, std::int32_t y) { return height[x] > height[y]; });
-  if (arms.size() < 2 || height[arms[1]] < 3) return "the chest has fewer than two chains of three joints (arms)";
-  arms.resize(2);
-
-  Anatomy::Side found_legs[2], found_arms[2];
-  glm::vec3 forward(0.0f);
-  for (int k = 0; k < 2; ++k) {
-    const std::vector<std::int32_t> chain = chain_from(legs[k]);
-    const int i = longest_pair(chain);
-    if (i < 0) return "a leg chain is too short";
-    Anatomy::Side& leg = found_legs[k];
-    leg.hip = chain[i], leg.knee = chain[i + 1], leg.ankle = chain[i + 2];
-    if (static_cast<std::size_t>(i) + 3 < chain.size()) leg.toe = chain[i + 3];
-    const BvhJoint& last = motion.joints[chain.back()];
-    const glm::vec3 tip = last.has_end_site ? rest[chain.back()] + last.end_site : rest[chain.back()];
-    forward += tip - rest[leg.ankle];
-    const std::vector<std::int32_t> arm = chain_from(arms[k]);
-    const int a_i = longest_pair(arm);
-    if (a_i < 0) return "an arm chain is too short";
-    Anatomy::Side& side = found_arms[k];
-    side.shoulder = arm[a_i], side.elbow = arm[a_i + 1], side.wrist = arm[a_i + 2];
-    if (a_i >= 1) side.collar = arm[a_i - 1];
-  }
-  const glm::vec3 up = glm::normalize(up_guess);
-  forward -= glm::dot(forward, up) * up;
-  const float leg_length = glm::length(rest[found_legs[0].ankle] - rest[found_legs[0].hip]);
-  glm::vec3 left;
-  if (glm::length(forward) > 0.1f * leg_length) {
-    left = glm::cross(up, glm::normalize(forward));
-    family = "by shape (names not recognised)";
-  } else {
-    left = glm::vec3(1, 0, 0) - glm::dot(glm::vec3(1, 0, 0), up) * up;  // faces +Z: +X is the left
-    family = "by shape (names not recognised; facing +Z assumed)";
-  }
-  auto side_of = [&](std::int32_t j) { return glm::dot(rest[j] - rest[pelvis], left); };
-  const bool legs_swapped = side_of(found_legs[0].hip) < side_of(found_legs[1].hip);
-  const bool arms_swapped = side_of(found_arms[0].shoulder) < side_of(found_arms[1].shoulder);
-  if (side_of(found_legs[legs_swapped ? 1 : 0].hip) == side_of(found_legs[legs_swapped ? 0 : 1].hip))
-    return "the two legs are on one side of the body";
+  HumanoidShape shape;
+  const std::string why = find_humanoid_by_shape(parents, rest, tips, shape);
+  if (!why.empty()) return why;
+  a.root = shape.pelvis, a.vl5 = shape.vl5, a.vt6 = shape.vt6, a.neck = shape.neck, a.head = shape.head;
   for (int s = 0; s < 2; ++s) {
-    a.sides[s] = found_legs[(s == 0) != legs_swapped ? 0 : 1];
-    const Anatomy::Side& arm = found_arms[(s == 0) != arms_swapped ? 0 : 1];
-    a.sides[s].collar = arm.collar, a.sides[s].shoulder = arm.shoulder, a.sides[s].elbow = arm.elbow,
-    a.sides[s].wrist = arm.wrist;
+    const HumanoidShape::Side& d = shape.sides[s];
+    Anatomy::Side& side = a.sides[s];
+    side.collar = d.collar, side.shoulder = d.shoulder, side.elbow = d.elbow, side.wrist = d.wrist;
+    side.hip = d.hip, side.knee = d.knee, side.ankle = d.ankle, side.toe = d.toe;
   }
-
-  // The neck's chain: on while it does not branch; the head is where it ends or branches.
-  std::int32_t head = neck;
-  while (children[head].size() == 1) head = children[head][0];
-  a.root = pelvis;
-  a.neck = neck;
-  a.head = head != neck ? head : -1;
-  std::vector<std::int32_t> spine;
-  for (std::int32_t j = motion.joints[static_cast<std::size_t>(neck)].parent; j >= 0 && j != pelvis;
-       j = motion.joints[static_cast<std::size_t>(j)].parent)
-    spine.insert(spine.begin(), j);
-  if (!spine.empty()) a.vl5 = spine.front();
-  if (spine.size() >= 2) a.vt6 = spine.back();
+  family = shape.facing_assumed ? "by shape (names not recognised; facing +Z assumed)" : "by shape (names not recognised)";
   return {};
 }
 

@@ -683,7 +683,11 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
     return j;
   };
   rig.root = 0;
-  rig.sacroiliac = need("sacroiliac");
+  // The joint the legs hang from. A rig whose pelvis is its root (Mixamo's Hips, a glTF skin named by shape) has no
+  // separate sacroiliac: the root takes the pelvis's rotation too, so the spine turns with the pelvis there.
+  rig.sacroiliac = skeleton.find_joint("sacroiliac");
+  if (rig.sacroiliac < 0 && skeleton.parents[rig.limbs[kLeftLeg].upper] == 0) rig.sacroiliac = 0;
+  if (rig.sacroiliac < 0) rig.sacroiliac = need("sacroiliac");
   rig.spine = skeleton.find_joint("vl5");
   // The ball of the foot, where the toes break: H-Anim 1.1's midtarsal (2019's transversetarsal) in the shipped
   // skeleton; a 2019 figure without it (Humanoid1 goes ankle -> metatarsophalangeal_2) breaks at the second toe's
@@ -766,12 +770,20 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
     // with the elbow bent to reach a raised knot put the upper arm behind the body through the whole cycle
     // (measured shoulder flexion -17..-1 deg).
     const glm::vec3 elbow = skeleton.centers[limb.middle];
+    // The arm as it hangs. H-Anim rests with the arms down; a rig modelled in a T- or A-pose (most glTF and Mixamo
+    // skins; CesiumMan's arms are level) would otherwise swing its arms out sideways: an upper arm more than 45 deg
+    // from straight down is hung straight down, segment lengths kept.
+    glm::vec3 upper_rest = elbow - shoulder, fore_rest = wrist - elbow;
+    if (glm::dot(glm::normalize(upper_rest), glm::vec3(0, -1, 0)) < 0.7071f) {
+      upper_rest = glm::vec3(0.0f, -glm::length(upper_rest), 0.0f);
+      fore_rest = glm::vec3(0.0f, -glm::length(fore_rest), 0.0f);
+      rig.wrist_rest[arm] = shoulder + upper_rest + fore_rest;
+    }
     auto wrist_at = [&](float shoulder_flexion_deg, float elbow_flexion_deg, float inward_m) {
       const float sf = glm::radians(shoulder_flexion_deg), ef = glm::radians(elbow_flexion_deg);
       // pitch(-a) swings a hanging segment forward by a (H-Anim: +X is the character's left).
       const glm::quat upper = pitch(-sf);
-      return shoulder + upper * (elbow - shoulder) + (upper * pitch(-ef)) * (wrist - elbow) +
-             glm::vec3(inward_m * inward, 0.0f, 0.0f);
+      return shoulder + upper * upper_rest + (upper * pitch(-ef)) * fore_rest + glm::vec3(inward_m * inward, 0.0f, 0.0f);
     };
     std::vector<glm::vec3> knots = {wrist_at(-16.0f, 10.0f, 0.0f), wrist_at(1.0f, 16.0f, 0.004f),
                                     wrist_at(17.0f, 26.0f, 0.02f), wrist_at(1.0f, 16.0f, 0.004f)};

@@ -450,7 +450,8 @@ float skinning_error(const Glb& glb, const ImportedBody& body, float t) {
       expected += ws[4 * v + c] / sum * (joint_matrix[js[4 * v + c]] * glm::vec4(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2], 1.0f));
     for (int k = 0; k < kMaxInfluences; ++k)
       got += body.skin.weights[v][k] * (pose.skinning[body.skin.joints[v][k]] * glm::vec4(body.mesh.positions[v], 1.0f));
-    worst = std::max(worst, glm::length(glm::vec3(expected) - glm::vec3(got)));
+    // The loader turned the figure to face +Z (ImportedBody::facing_turn); the file's skinning is in its own space.
+    worst = std::max(worst, glm::length(body.facing_turn * glm::vec3(expected) - glm::vec3(got)));
   }
   return worst;
 }
@@ -470,14 +471,33 @@ TEST(Gltf, CesiumManCountsAndRestPose) {
   for (std::size_t j = 1; j < b.skeleton.joint_count(); ++j) {
     EXPECT_GE(b.skeleton.parents[j], 0);
     EXPECT_LT(b.skeleton.parents[j], (int)j);
-    EXPECT_EQ(b.skeleton.joint_names[j].rfind("joint_", 0), 0u);  // every node is unnamed
+    EXPECT_EQ(b.skeleton.source_joint_names[j].rfind("joint_", 0), 0u);  // every node is unnamed
   }
+  // Named by shape (components/humanoid_shape.h) and turned to face +Z: the left hip at +X, knees below hips,
+  // ankles below knees, the neck above the chest, every limb a parent-child chain as the IK needs.
+  const Skeleton& s = b.skeleton;
+  for (const char* name : {"HumanoidRoot", "vl5", "vt6", "vc4", "skullbase", "l_hip", "l_knee", "l_ankle", "r_hip",
+                           "r_knee", "r_ankle", "l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow", "r_wrist"})
+    EXPECT_GE(s.find_joint(name), 0) << name;
+  auto at = [&](const char* name) { return s.centers[static_cast<std::size_t>(s.find_joint(name))]; };
+  EXPECT_GT(at("l_hip").x, at("r_hip").x + 0.1f);
+  EXPECT_GT(at("l_shoulder").x, at("r_shoulder").x + 0.1f);
+  EXPECT_GT(at("l_hip").y, at("l_knee").y + 0.2f);  // CesiumMan is 1.5 m: 0.26 m thighs, 0.27 m shins
+  EXPECT_GT(at("l_knee").y, at("l_ankle").y + 0.2f);
+  EXPECT_GT(at("vc4").y, at("vt6").y);
+  EXPECT_EQ(s.parents[s.find_joint("l_knee")], s.find_joint("l_hip"));
+  EXPECT_EQ(s.parents[s.find_joint("r_wrist")], s.find_joint("r_elbow"));
+  // The toes point forward (+Z) once turned.
+  EXPECT_GT(at("l_midtarsal").z, at("l_ankle").z + 0.02f);
+  EXPECT_TRUE(std::any_of(b.warnings.begin(), b.warnings.end(),
+                          [](const std::string& w) { return w.find("turned -90 deg about +Y") != std::string::npos; }));
   // Z-up content under the root's -90 deg X matrix comes out Y-up, feet on the floor.
   glm::vec3 lo(1e9f), hi(-1e9f);
   for (const glm::vec3& p : b.mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
   std::cout << "[ info ] CesiumMan bounds " << lo.x << " " << lo.y << " " << lo.z << " .. " << hi.x << " " << hi.y
             << " " << hi.z << "\n";
-  // Up is the longest extent (the file's Z); the outstretched arms span the horizontal Z (the figure faces X).
+  // Up is the longest extent (the file's Z); the outstretched arms span X now that the figure faces +Z (the file's
+  // figure faces X).
   EXPECT_NEAR(hi.y - lo.y, 1.51f, 0.03f);
   EXPECT_GT(hi.y - lo.y, hi.z - lo.z + 0.3f);
   EXPECT_GT(hi.y - lo.y, hi.x - lo.x + 0.3f);
