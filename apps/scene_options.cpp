@@ -110,8 +110,9 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
   // refused rather than wrapped to 2^64-1 as CLI11's unsigned conversion does.
   cmd.add_option("--seed", o.seed, "Seed for per-walker phase, rate and heading")->capture_default_str()
       ->check(whole_in(0, 9007199254740992.0, true));
-  cmd.add_option("--spacing", o.spacing, "Metres between walkers on the grid")->capture_default_str()
-      ->check(positive_up_to(1000));
+  cmd.add_option("--spacing", o.spacing, "Metres between walkers on the grid (default: 1.25 scaled by the rig's stature over 1.75 m)")->capture_default_str()
+      ->check(positive_up_to(1000))
+      ->each([&o](const std::string&) { o.spacing_given = true; });
   cmd.add_option("--threads", o.threads, "Worker threads (0 = all cores; more than the cores run as many as the cores)")
       ->capture_default_str()->check(whole_in(0, 4096));
   // Parsed by DetailLevel::parse, the one place that knows level names; the validator runs first so a bad value

@@ -21,7 +21,8 @@ struct SceneOptions {
   std::string clip;      // name, index or "all"; empty = all clips
   bool rest = false;
   std::uint64_t seed = 1;
-  float spacing = 1.25f;
+  float spacing = 1.25f;  // grid spacing of clip walkers; scaled by the rig's stature / 1.75 m unless given
+  bool spacing_given = false;
   int threads = 0;       // 0 = all cores
   DetailLevel level;     // body resolution drawn (components/detail_level.h); default mesh level 0
   SkinningMode skinning = SkinningMode::Linear;  // how joints are blended (components/skin_layout.h)

@@ -2,14 +2,18 @@
 // serve the flag it was given to.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <memory>
 #include <set>
 #include <string>
 
 #include "io/load_error.h"
 #include "scene/input_formats.h"
 #include "scene/scene_setup.h"
+#include "tests/temp_dir.h"
 
 namespace strata {
 namespace {
@@ -121,6 +125,36 @@ TEST(InputFormats, BuildSceneRefusesAMeshFlagOnMotionCapture) {
   } catch (const LoadError& e) {
     EXPECT_NE(std::string(e.what()).find("no skinned body"), std::string::npos) << e.what();
   }
+}
+
+// A clip crowd plays each rig at its own size: the grid's default spacing scales with the rig's stature, and an
+// explicit --spacing is kept as given.
+TEST(SceneSetup, ClipGridSpacingScalesWithTheRigsStature) {
+  const test::TempDir dir("strata_spacing");
+  std::ifstream in(std::filesystem::path(STRATA_TEST_DATA) / ".." / ".." / "data" / "default_skeleton.x3d");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t humanoid = text.find("<HAnimHumanoid ");
+  ASSERT_NE(humanoid, std::string::npos);
+  text.insert(humanoid + 15, "scale='2 2 2' ");
+  const std::filesystem::path giant = dir / "giant.x3d";
+  std::ofstream(giant) << text;
+
+  auto spacing_of = [](const SceneOptions& o) {
+    const std::unique_ptr<Crowd> scene = build_scene(o);
+    const WalkerLanes lanes = scene->lanes();
+    return std::abs(lanes.at(lanes.placement, 0)[1] - lanes.at(lanes.placement, 0)[0]);
+  };
+  SceneOptions o;
+  o.walkers = 2;
+  o.rest = true;
+  o.level = DetailLevel::none();
+  const float person = spacing_of(o);
+  EXPECT_NEAR(person, 1.25f, 0.01f);  // the shipped skeleton is 1.75 m
+  o.skeleton = giant.string();
+  EXPECT_NEAR(spacing_of(o), 2.0f * person, 0.01f);
+  o.spacing = 0.8f;
+  o.spacing_given = true;
+  EXPECT_FLOAT_EQ(spacing_of(o), 0.8f);
 }
 
 }  // namespace
