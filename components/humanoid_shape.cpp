@@ -115,7 +115,11 @@ std::string find_humanoid_by_shape(std::span<const std::int32_t> parents, std::s
     if (a_i < 0) return "an arm chain is too short";
     HumanoidShape::Side& side = found_arms[k];
     side.shoulder = arm[a_i], side.elbow = arm[a_i + 1], side.wrist = arm[a_i + 2];
-    if (a_i >= 1) side.collar = arm[a_i - 1];
+    // The collar is the joint before the shoulder, past any zero-length helper at the shoulder itself (a roll bone
+    // written where the shoulder is), whose bone would give the collar no direction.
+    int c = a_i - 1;
+    while (c >= 0 && glm::length(rest[arm[c + 1]] - rest[arm[c]]) < 1e-4f * (1.0f + glm::length(rest[arm[c]]))) --c;
+    if (c >= 0) side.collar = arm[c];
   }
   const glm::vec3 up = glm::normalize(up_guess);
   forward -= glm::dot(forward, up) * up;

@@ -13,6 +13,7 @@ set(STRATA_FUZZ_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=all -fn
 add_library(strata_fuzz_loaders STATIC
   components/skeleton.cpp
   components/mesh.cpp
+  components/humanoid_shape.cpp
   io/hanim_x3d.cpp
   io/hanim_paper_xml.cpp
   io/hanim_loader.cpp
@@ -26,6 +27,8 @@ add_library(strata_fuzz_loaders STATIC
   rig/harmonic_weights.cpp
   io/muscle_file.cpp
   io/scenario_file.cpp
+  io/retarget_map_file.cpp
+  motion/bvh_naming.cpp
   rig/muscle_binding.cpp
   ${STRATA_EMBED_CPP})
 target_include_directories(strata_fuzz_loaders PUBLIC ${CMAKE_CURRENT_SOURCE_DIR})

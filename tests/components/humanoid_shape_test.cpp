@@ -1,0 +1,111 @@
+// Finding a humanoid's joints by shape (components/humanoid_shape.h) on small skeletons written here: a Mixamo-like
+// rig facing -Z with helper joints, a rig already named, and trees that are no humanoid.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "components/humanoid_shape.h"
+#include "components/skeleton.h"
+
+namespace strata {
+namespace {
+
+// A rig facing -Z (its left at -X), pelvis at the root, a twist helper on each upper arm, toes, and eyes on the
+// head; every joint named in a vocabulary no rule knows.
+Skeleton foreign_rig() {
+  Skeleton s;
+  s.name = "foreign";
+  s.source = "foreign.glb";
+  auto add = [&](const std::string& name, int parent, glm::vec3 c) {
+    s.joint_names.push_back(name);
+    s.source_joint_names.push_back(name);
+    s.parents.push_back(parent);
+    s.centers.push_back(c);
+    s.limits.emplace_back();
+    s.stiffness.emplace_back(1.0f);
+    return static_cast<int>(s.parents.size() - 1);
+  };
+  const int pelvis = add("P", -1, {0, 1.0f, 0});
+  const int s1 = add("S1", pelvis, {0, 1.15f, 0});
+  const int chest = add("S2", s1, {0, 1.35f, 0});
+  const int neck = add("N", chest, {0, 1.55f, 0});
+  const int head = add("H", neck, {0, 1.65f, 0});
+  add("EyeA", head, {0.03f, 1.7f, -0.08f});
+  add("EyeB", head, {-0.03f, 1.7f, -0.08f});
+  for (const float side : {-1.0f, 1.0f}) {  // -X is this rig's left
+    const std::string tag = side < 0 ? "A" : "B";
+    const int clav = add("C" + tag, chest, {0.05f * side, 1.5f, 0});
+    const int upper = add("U" + tag, clav, {0.18f * side, 1.48f, 0});
+    // A roll helper at the shoulder itself (a zero-length bone, as many exporters write): the limb rotates there.
+    const int twist = add("T" + tag, upper, {0.18f * side, 1.48f, 0});
+    const int fore = add("F" + tag, twist, {0.2f * side, 1.2f, 0});
+    const int hand = add("W" + tag, fore, {0.2f * side, 0.95f, 0});
+    add("M" + tag, hand, {0.2f * side, 0.85f, 0});
+    (void)upper;
+  }
+  for (const float side : {-1.0f, 1.0f}) {
+    const std::string tag = side < 0 ? "A" : "B";
+    const int thigh = add("L1" + tag, pelvis, {0.1f * side, 0.95f, 0});
+    const int shin = add("L2" + tag, thigh, {0.1f * side, 0.5f, 0});
+    const int foot = add("L3" + tag, shin, {0.1f * side, 0.08f, 0});
+    add("L4" + tag, foot, {0.1f * side, 0.02f, -0.14f});  // toes ahead, towards -Z
+  }
+  return s;
+}
+
+TEST(HumanoidShape, NamesAForeignRigFromItsShape) {
+  Skeleton s = foreign_rig();
+  std::string why;
+  ASSERT_TRUE(name_joints_by_shape(s, &why)) << why;
+  auto named = [&](const char* hanim) {
+    const std::int32_t j = s.find_joint(hanim);
+    return j < 0 ? std::string("(none)") : s.source_joint_names[static_cast<std::size_t>(j)];
+  };
+  EXPECT_EQ(named("HumanoidRoot"), "P");
+  EXPECT_EQ(named("vl5"), "S1");
+  EXPECT_EQ(named("vt6"), "S2");
+  EXPECT_EQ(named("vc4"), "N");
+  EXPECT_EQ(named("skullbase"), "H");
+  // Facing -Z, the left is -X: the "A" side. Upper arm and forearm are the longest consecutive pair, so the roll
+  // helper at the shoulder (the elbow's parent) is the shoulder the IK turns; the collar is the joint before the
+  // zero-length helper bone.
+  EXPECT_EQ(named("l_sternoclavicular"), "CA");
+  EXPECT_EQ(named("l_shoulder"), "TA");
+  EXPECT_EQ(named("l_elbow"), "FA");
+  EXPECT_EQ(named("l_wrist"), "WA");
+  EXPECT_EQ(named("l_hip"), "L1A");
+  EXPECT_EQ(named("l_knee"), "L2A");
+  EXPECT_EQ(named("l_ankle"), "L3A");
+  EXPECT_EQ(named("l_midtarsal"), "L4A");
+  EXPECT_EQ(named("r_hip"), "L1B");
+  EXPECT_EQ(s.source_joint_names[0], "P");  // the file's names are kept
+  EXPECT_NE(s.warnings.back().find("joints named by the skeleton's shape"), std::string::npos);
+}
+
+TEST(HumanoidShape, LeavesNamedRigsAndNonHumanoidsAlone) {
+  Skeleton named = foreign_rig();
+  ASSERT_TRUE(name_joints_by_shape(named));
+  const std::vector<std::string> before = named.joint_names;
+  std::string why;
+  EXPECT_FALSE(name_joints_by_shape(named, &why));
+  EXPECT_EQ(why, "the skeleton already has H-Anim limb names");
+  EXPECT_EQ(named.joint_names, before);
+
+  // A chain (RiggedSimple's two-bone cylinder) and a star with no spine branch.
+  Skeleton chain = foreign_rig();
+  chain.parents.resize(3), chain.centers.resize(3), chain.joint_names.resize(3), chain.source_joint_names.resize(3);
+  EXPECT_FALSE(name_joints_by_shape(chain, &why));
+  EXPECT_NE(why.find("no joint where the legs and the spine branch"), std::string::npos) << why;
+  EXPECT_EQ(chain.joint_names, (std::vector<std::string>{"P", "S1", "S2"}));
+
+  HumanoidShape shape;
+  const std::int32_t parents[] = {-1, 0, 0, 0};
+  const glm::vec3 rest[] = {{0, 1, 0}, {0.1f, 0.5f, 0}, {-0.1f, 0.5f, 0}, {0, 1.5f, 0}};
+  EXPECT_NE(find_humanoid_by_shape(parents, rest, {}, shape).find("branches into a neck and two arms"),
+            std::string::npos);
+  const std::int32_t unordered[] = {-1, 2, 0};
+  EXPECT_EQ(find_humanoid_by_shape(unordered, std::span(rest, 3), {}, shape), "joints not in topological order");
+}
+
+}  // namespace
+}  // namespace strata
