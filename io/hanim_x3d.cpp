@@ -18,6 +18,11 @@
 //   rotation key cannot be baked exactly; that case loads with a warning.
 // * A joint with a DEF and no name takes the H-Anim joint name its DEF ends in (DEF='hanim_l_hip' -> l_hip), with
 //   a warning; a DEF that ends in no H-Anim name is an error, as is a derived name another joint already has.
+// * Segment geometry (LOA-1 figures are built from rigid per-segment meshes): IndexedFaceSet and IndexedTriangleSet
+//   Shapes inside an HAnimSegment, through any Transforms and Groups, are read in humanoid coordinates (the
+//   joints' rest transforms are identity). A file without a skin gets them as its skin, every vertex weighted 1 to
+//   its segment's joint, so they are drawn and move as rigid parts; with a skin, the skin wins and they are ignored
+//   with a warning. Other geometry (lines, primitives) is not drawn.
 // * Joint translation/rotation are ignored (H-Anim's rest pose is identity with absolute centres); a non-identity
 //   value is reported as a warning so a file authored with relative offsets does not load silently wrong.
 #include <algorithm>
@@ -28,7 +33,9 @@
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/matrix.hpp>
 
 #include "io/hanim_readers.h"
@@ -66,6 +73,7 @@ class X3dReader {
     read_humanoid();
     finalize_joint_names(sk_);
     read_skin();
+    segments_as_skin();
     read_animation();
     apply_humanoid_transform();
     return std::move(asset_);
@@ -254,6 +262,7 @@ class X3dReader {
       } else if (is_tag(child, "HAnimSegment")) {
         if (child.attribute("USE")) continue;  // the DEF occurrence is the record
         add_segment(child, joint);
+        read_segment_geometry(child, joint, glm::mat4(1.0f));
         read_children(child, joint);
       } else if (is_tag(child, "HAnimSite")) {
         if (!child.attribute("USE")) add_site(child, joint);
@@ -341,6 +350,115 @@ class X3dReader {
         std::any_of(sk_.limits.begin(), sk_.limits.end(), [](const JointLimits& l) { return l.present; }))
       sk_.warnings.push_back(doc_.warning(humanoid_, "rotated humanoid: joint limits stay about the file's own "
                                                      "axes"));
+  }
+
+  // ---- segment geometry -----------------------------------------------------------------------------------------
+  struct SegmentMesh {
+    std::int32_t joint = -1;
+    std::vector<glm::vec3> points;
+    std::vector<std::uint32_t> triangles;
+  };
+
+  // X3D Transform: T(translation) T(center) R(rotation) R(scaleOrientation) S(scale) R(-scaleOrientation) T(-center).
+  glm::mat4 transform_matrix(pugi::xml_node node) const {
+    const glm::vec3 t = xml::vec3_attr(doc_, node, "translation").value_or(glm::vec3(0.0f));
+    const glm::vec3 c = xml::vec3_attr(doc_, node, "center").value_or(glm::vec3(0.0f));
+    const glm::vec3 sc = xml::vec3_attr(doc_, node, "scale").value_or(glm::vec3(1.0f));
+    const glm::mat4 r = glm::mat4_cast(axis_angle_attr(node, "rotation"));
+    const glm::mat4 so = glm::mat4_cast(axis_angle_attr(node, "scaleOrientation"));
+    glm::mat4 m = glm::translate(glm::mat4(1.0f), t + c) * r * so * glm::scale(glm::mat4(1.0f), sc) *
+                  glm::transpose(so) * glm::translate(glm::mat4(1.0f), -c);
+    return m;
+  }
+
+  // Shapes under a segment, through Transforms and Groups; not into nested joints, segments or sites (they are
+  // read as their own records).
+  void read_segment_geometry(pugi::xml_node container, std::int32_t joint, const glm::mat4& to_humanoid) {
+    for (pugi::xml_node child : container.children()) {
+      if (child.type() != pugi::node_element) continue;
+      const pugi::xml_node node = resolve(child);
+      if (is_tag(node, "HAnimJoint") || is_tag(node, "HAnimSegment") || is_tag(node, "HAnimSite")) continue;
+      if (is_tag(node, "Transform")) {
+        read_segment_geometry(node, joint, to_humanoid * transform_matrix(node));
+      } else if (is_tag(node, "Group") || is_tag(node, "StaticGroup") || is_tag(node, "Collision")) {
+        read_segment_geometry(node, joint, to_humanoid);
+      } else if (is_tag(node, "Shape")) {
+        for (pugi::xml_node g : node.children()) {
+          if (g.type() != pugi::node_element) continue;
+          const pugi::xml_node geometry = resolve(g);
+          if (is_tag(geometry, "IndexedFaceSet") || is_tag(geometry, "IndexedTriangleSet"))
+            add_segment_mesh(geometry, joint, to_humanoid);
+          else if (!is_tag(geometry, "Appearance"))
+            skipped_segment_geometry_ = true;
+        }
+      }
+    }
+  }
+
+  void add_segment_mesh(pugi::xml_node geometry, std::int32_t joint, const glm::mat4& to_humanoid) {
+    const pugi::xml_node coordinate = find_descendant(geometry, "Coordinate");
+    if (!coordinate) doc_.fail(geometry, "segment geometry without a Coordinate");
+    SegmentMesh mesh;
+    mesh.joint = joint;
+    for (const glm::vec3& p : read_points(coordinate)) mesh.points.push_back(glm::vec3(to_humanoid * glm::vec4(p, 1.0f)));
+    const std::size_t count = mesh.points.size();
+    const bool fan_faces = is_tag(geometry, "IndexedFaceSet");
+    const auto index = xml::int_list_attr(doc_, geometry, fan_faces ? "coordIndex" : "index")
+                           .value_or(std::vector<std::int64_t>{});
+    // X3D's ccw='false' winds the faces clockwise; the engine's triangles are counter-clockwise from outside. A
+    // mirroring Transform turns them inside out as well.
+    const bool flip = !xml::bool_attr(doc_, geometry, "ccw").value_or(true) != (glm::determinant(glm::mat3(to_humanoid)) < 0.0f);
+    std::vector<std::uint32_t> polygon;
+    auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+      mesh.triangles.insert(mesh.triangles.end(), {a, flip ? c : b, flip ? b : c});
+    };
+    auto flush = [&] {
+      for (std::size_t k = 1; k + 1 < polygon.size(); ++k) emit(polygon[0], polygon[k], polygon[k + 1]);
+      polygon.clear();
+    };
+    for (const std::int64_t i : index) {
+      if (fan_faces && i == -1) {
+        flush();
+        continue;
+      }
+      if (i < 0 || static_cast<std::size_t>(i) >= count)
+        doc_.fail(geometry, std::string(fan_faces ? "coordIndex " : "index ") + std::to_string(i) +
+                                " out of range (the segment mesh has " + std::to_string(count) + " points)");
+      polygon.push_back(static_cast<std::uint32_t>(i));
+      if (!fan_faces && polygon.size() == 3) flush();  // IndexedTriangleSet: every three indices are a triangle
+    }
+    if (fan_faces) flush();
+    if (!fan_faces && !polygon.empty())
+      doc_.fail(geometry, "index has " + std::to_string(index.size()) + " entries, not a multiple of 3");
+    if (!mesh.triangles.empty()) segment_meshes_.push_back(std::move(mesh));
+  }
+
+  // The segments' meshes as the skin of a file that has none: every vertex weighted 1 to its segment's joint.
+  void segments_as_skin() {
+    if (segment_meshes_.empty()) return;
+    if (!sk_.skin_points.empty()) {
+      sk_.warnings.push_back(doc_.warning(humanoid_, "segment geometry ignored: the humanoid has a skin"));
+      return;
+    }
+    std::vector<std::vector<std::uint32_t>> vertices_of(sk_.joint_count());
+    for (const SegmentMesh& mesh : segment_meshes_) {
+      const auto base = static_cast<std::uint32_t>(sk_.skin_points.size());
+      for (std::size_t v = 0; v < mesh.points.size(); ++v) {
+        vertices_of[static_cast<std::size_t>(mesh.joint)].push_back(base + static_cast<std::uint32_t>(v));
+        sk_.skin_points.push_back(mesh.points[v]);
+      }
+      for (const std::uint32_t t : mesh.triangles) sk_.skin_triangles.push_back(base + t);
+    }
+    sk_.skin_offsets.assign(sk_.joint_count() + 1, 0);
+    sk_.skin_influences.clear();
+    for (std::size_t j = 0; j < sk_.joint_count(); ++j) {
+      sk_.skin_offsets[j] = static_cast<std::uint32_t>(sk_.skin_influences.size());
+      for (const std::uint32_t v : vertices_of[j]) sk_.skin_influences.push_back({v, 1.0f});
+    }
+    sk_.skin_offsets.back() = static_cast<std::uint32_t>(sk_.skin_influences.size());
+    if (skipped_segment_geometry_)
+      sk_.warnings.push_back(doc_.warning(humanoid_, "segment geometry other than IndexedFaceSet and "
+                                                     "IndexedTriangleSet (lines, primitives) is not drawn"));
   }
 
   // ---- skin ------------------------------------------------------------------------------------------------
@@ -571,6 +689,8 @@ class X3dReader {
   bool any_skin_weights_ = false;
   pugi::xml_node skin_node_;
   pugi::xml_node skin_coord_;
+  std::vector<SegmentMesh> segment_meshes_;
+  bool skipped_segment_geometry_ = false;
   float metres_per_unit_ = 1.0f;   // X3D UNIT length conversionFactor
   float radians_per_unit_ = 1.0f;  // X3D UNIT angle conversionFactor
   std::map<std::pair<const void*, float>, ParsedInterpolator> parsed_;

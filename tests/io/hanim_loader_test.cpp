@@ -877,5 +877,46 @@ TEST(RestStature, FromTheSkullTipElseTheTopJointPlusAHead) {
   EXPECT_STREQ(rest_stature(bare).source, "joints");
 }
 
+
+// An LOA-1 style figure built from rigid segment meshes and no skin: the meshes become the skin, each vertex
+// weighted 1 to its segment's joint, with Transforms applied and faces wound outward.
+TEST(X3dSegments, SegmentMeshesBecomeARigidSkin) {
+  const std::string text = R"(<X3D><Scene>
+<HAnimHumanoid name='loa1'>
+ <HAnimJoint name='HumanoidRoot' center='0 1 0' containerField='skeleton'>
+  <HAnimSegment name='pelvis'>
+   <Transform translation='0 1 0' scale='2 2 2'>
+    <Shape><Appearance/><IndexedFaceSet coordIndex='0 1 2 3 -1'>
+     <Coordinate point='-0.1 0 0 0.1 0 0 0.1 0.1 0 -0.1 0.1 0'/></IndexedFaceSet></Shape>
+   </Transform>
+  </HAnimSegment>
+  <HAnimJoint name='l_hip' center='0.1 0.9 0'>
+   <HAnimSegment name='l_thigh'>
+    <Group><Shape><IndexedTriangleSet index='0 1 2' ccw='false'>
+     <Coordinate point='0.1 0.9 0 0.1 0.5 0 0.12 0.5 0.02'/></IndexedTriangleSet></Shape></Group>
+    <Shape><IndexedLineSet coordIndex='0 1'><Coordinate point='0 0 0 1 1 1'/></IndexedLineSet></Shape>
+   </HAnimSegment>
+  </HAnimJoint>
+ </HAnimJoint>
+</HAnimHumanoid></Scene></X3D>)";
+  const Skeleton s = load_humanoid_text(text, "loa1.x3d").skeleton;
+  ASSERT_EQ(s.skin_points.size(), 7u);
+  // The pelvis quad: scaled 2 and lifted 1 by its Transform, a fan of two triangles.
+  expect_vec_near(s.skin_points[1], glm::vec3(0.2f, 1.0f, 0.0f), "pelvis corner");
+  expect_vec_near(s.skin_points[2], glm::vec3(0.2f, 1.2f, 0.0f), "pelvis corner");
+  // ccw='false' is rewound: 4 5 6 becomes 4 6 5.
+  EXPECT_EQ(s.skin_triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 4, 6, 5}));
+  ASSERT_EQ(s.skin_offsets.size(), 3u);
+  EXPECT_EQ(s.skin_offsets[1] - s.skin_offsets[0], 4u);  // the root carries the pelvis
+  EXPECT_EQ(s.skin_offsets[2] - s.skin_offsets[1], 3u);  // l_hip the thigh
+  for (const SkinInfluence& inf : s.skin_influences) EXPECT_EQ(inf.weight, 1.0f);
+  EXPECT_EQ(s.skin_influences[s.skin_offsets[1]].vertex, 4u);
+  EXPECT_TRUE(any_warning_contains(s, {"lines, primitives", "not drawn"}));
+  // Bad segment geometry is named like every other error.
+  std::string bad = text;
+  bad.replace(bad.find("index='0 1 2'"), 13, "index='0 1 7'");
+  expect_load_error(bad, 12, {"IndexedTriangleSet", "index 7 out of range (the segment mesh has 3 points)"});
+}
+
 }  // namespace
 }  // namespace strata
