@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "components/humanoid_shape.h"
 #include "scene/body_settings.h"
 
 namespace strata {
@@ -62,7 +63,21 @@ Crowd::Crowd(Rig r) {
   try {
     motion.locomotion = std::make_unique<const LocomotionRig>(make_locomotion_rig(rig().skeleton));
   } catch (const std::exception& e) {
-    motion.walk_error = e.what();
+    // Said in the rig's terms, not the limb builder's: which joints the walk needs that the rig lacks, and why the
+    // shape rules (components/humanoid_shape.h) could not find them either.
+    const Skeleton& s = rig().skeleton;
+    std::string missing;
+    for (const char* joint : {"l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle", "l_shoulder", "l_elbow",
+                              "l_wrist", "r_shoulder", "r_elbow", "r_wrist"})
+      if (s.find_joint(joint) < 0) missing += std::string(missing.empty() ? "" : ", ") + joint;
+    if (missing.empty()) {
+      motion.walk_error = "'" + rig().name + "' cannot walk: " + e.what();
+    } else {
+      HumanoidShape shape;
+      const std::string why = find_humanoid_by_shape(s.parents, s.centers, {}, shape);
+      motion.walk_error = "'" + rig().name + "' cannot walk: it has no " + missing +
+                          (why.empty() ? std::string() : " (and by shape: " + why + ")");
+    }
   }
   // Rest height for projected sizes: the body's, else the skeleton's joint span plus a head's worth.
   const Rig& rr = rig();

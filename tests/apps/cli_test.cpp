@@ -469,6 +469,22 @@ TEST(StrataInfo, AScaledHumanoidIsReadInMetres) {
   ASSERT_EQ(crowd.status, 0) << crowd.out;
 }
 
+// A skin that is no humanoid (RiggedSimple's two-bone cylinder) cannot walk: one line naming the joints it lacks
+// and why the shape rules could not find them; without --motion it plays its own clip.
+TEST(StrataCrowd, ARigThatCannotWalkSaysWhichJointsItLacks) {
+  const fs::path gltf = fs::path(STRATA_SHARED_DATA) / "gltf_khronos_samples" / "RiggedSimple.glb";
+  if (!fs::exists(gltf)) GTEST_SKIP() << "no " << gltf;
+  Result walk = run("crowd --mesh " + gltf.string() + " --motion walk --frames 1 --no-mp4 --no-progress --out " +
+                    scratch("rs_walk").string());
+  EXPECT_NE(walk.status, 0);
+  EXPECT_NE(walk.out.find("cannot walk: it has no l_hip, l_knee, l_ankle, r_hip"), std::string::npos) << walk.out;
+  EXPECT_NE(walk.out.find("by shape: no joint where the legs and the spine branch"), std::string::npos) << walk.out;
+  EXPECT_EQ(walk.out.find("make_limbs"), std::string::npos) << "no internal names: " << walk.out;
+  Result plays = run("crowd --mesh " + gltf.string() + " --walkers 2 --frames 1 --width 96 --height 64 --no-mp4 "
+                     "--no-progress --out " + scratch("rs_clip").string());
+  EXPECT_EQ(plays.status, 0) << plays.out;
+}
+
 TEST(StrataCrowd, ImpostorsOnlyForTheWalk) {
   const fs::path out = scratch("impostor_crowd");
   Result r = run("crowd --walkers 6 --frames 2 --level impostor --no-mp4 --table1-frames 0 --out " + out.string());
