@@ -303,20 +303,16 @@ class X3dReader {
   }
 
   void apply_humanoid_transform() {
-    const glm::vec3 translation = xml::vec3_attr(doc_, humanoid_, "translation").value_or(glm::vec3(0.0f));
-    const glm::vec3 center = xml::vec3_attr(doc_, humanoid_, "center").value_or(glm::vec3(0.0f));
     const glm::vec3 scale = xml::vec3_attr(doc_, humanoid_, "scale").value_or(glm::vec3(1.0f));
     const glm::quat rotation = axis_angle_attr(humanoid_, "rotation");
-    const glm::quat scale_orientation = axis_angle_attr(humanoid_, "scaleOrientation");
     if (scale.x == 0.0f || scale.y == 0.0f || scale.z == 0.0f)
       doc_.fail(humanoid_, "scale has a zero component; the figure would collapse");
 
-    // X3D Transform: P' = T + C + R * SR * S * SR^-1 * (P - C), then the unit to metres on top.
-    const glm::mat3 so(glm::mat3_cast(scale_orientation));
-    const glm::mat3 linear = metres_per_unit_ * glm::mat3(glm::mat3_cast(rotation)) * so *
-                             glm::mat3(glm::vec3(scale.x, 0, 0), glm::vec3(0, scale.y, 0), glm::vec3(0, 0, scale.z)) *
-                             glm::transpose(so);
-    const glm::vec3 offset = metres_per_unit_ * (translation + center) - linear * center;
+    // The humanoid's own Transform (the same X3D semantics as a Transform around segment geometry), then the unit
+    // to metres on top: P' = f (A P + b).
+    const glm::mat4 m = transform_matrix(humanoid_);
+    const glm::mat3 linear = metres_per_unit_ * glm::mat3(m);
+    const glm::vec3 offset = metres_per_unit_ * glm::vec3(m[3]);
     const bool identity = linear == glm::mat3(1.0f) && offset == glm::vec3(0.0f);
     if (identity) return;
     auto place = [&](glm::vec3 p) { return linear * p + offset; };
@@ -366,9 +362,8 @@ class X3dReader {
     const glm::vec3 sc = xml::vec3_attr(doc_, node, "scale").value_or(glm::vec3(1.0f));
     const glm::mat4 r = glm::mat4_cast(axis_angle_attr(node, "rotation"));
     const glm::mat4 so = glm::mat4_cast(axis_angle_attr(node, "scaleOrientation"));
-    glm::mat4 m = glm::translate(glm::mat4(1.0f), t + c) * r * so * glm::scale(glm::mat4(1.0f), sc) *
-                  glm::transpose(so) * glm::translate(glm::mat4(1.0f), -c);
-    return m;
+    return glm::translate(glm::mat4(1.0f), t + c) * r * so * glm::scale(glm::mat4(1.0f), sc) * glm::transpose(so) *
+           glm::translate(glm::mat4(1.0f), -c);
   }
 
   // Shapes under a segment, through Transforms and Groups; not into nested joints, segments or sites (they are
