@@ -123,20 +123,7 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
   CrowdConfig config;
   config.walkers = o.walkers;
   config.seed = o.seed;
-  // A grid of clip walkers plays each rig at its own size, so 1.25 m apart suits a person but not a 4 m giant or a
-  // 30 cm doll: unless --spacing was given, the default scales with the rig's stature (its body's height where it
-  // has one) over 1.75 m. Walk and capture crowds are scaled to people's heights and keep it.
   config.spacing = o.spacing;
-  float rig_spacing_scale = 1.0f;
-  if (!o.spacing_given) {
-    float stature = rest_stature(rig.skeleton).metres;
-    if (rig.body && !rig.body->levels.empty() && !rig.body->levels.front().mesh.positions.empty()) {
-      float low = 1e30f, high = -1e30f;
-      for (const glm::vec3& p : rig.body->levels.front().mesh.positions) low = std::min(low, p.y), high = std::max(high, p.y);
-      stature = high - low;
-    }
-    if (stature > 0.0f && std::isfinite(stature)) rig_spacing_scale = std::clamp(stature / 1.75f, 0.05f, 100.0f);
-  }
   config.clip = resolve_clip(rig, o.clip, o.rest);
   auto scene = std::make_unique<Crowd>(std::move(rig));
   if (!o.retarget_map.empty() && !std::filesystem::path(o.motion).has_extension())
@@ -170,7 +157,13 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
     throw std::invalid_argument("--motion must be 'walk', 'clip' or a .bvh file, got '" + o.motion + "'");
   }
   if (config.motion == MotionSource::Clip) {
-    config.spacing = o.spacing * rig_spacing_scale;
+    // A grid of clip walkers plays each rig at its own size, so 1.25 m apart suits a person but not a 4 m giant or
+    // a 30 cm doll: unless --spacing was given, the default scales with the rig's stature over 1.75 m (the body's
+    // height, which the crowd measured for projected sizes, else the skeleton's). Walk and capture crowds are
+    // scaled to people's heights and keep it.
+    const float stature = scene->rig().body ? scene->skin.body_height : rest_stature(scene->rig().skeleton).metres;
+    if (!o.spacing_given && stature > 0.0f && std::isfinite(stature))
+      config.spacing = o.spacing * std::clamp(stature / 1.75f, 0.05f, 100.0f);
     // A rig that cannot walk and has nothing to play would stand still with no word why.
     if (scene->rig().clips.empty() && o.motion.empty() && !o.rest)
       std::fprintf(stderr, "note: %s has no clips and cannot walk (%s); showing its rest pose\n",
