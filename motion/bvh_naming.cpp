@@ -45,12 +45,6 @@ struct NameIndex {
   }
 };
 
-std::string joined(const std::vector<std::string>& v) {
-  std::string out;
-  for (const std::string& s : v) out += (out.empty() ? "" : ", ") + s;
-  return out;
-}
-
 // Nearest signed axis of a direction (0..2 for x, y, z; the sign in `sign`).
 int snapped_axis(const glm::vec3& d, float& sign) {
   int best = 0;
@@ -183,13 +177,14 @@ BvhNaming finish(const BvhMotion& motion, Anatomy a, std::string family) {
 }
 
 // ---- by name -----------------------------------------------------------------------------------------------------
-// Fills `a` from the joint names; returns the H-Anim joints no name matched (each with the names tried).
+// Fills `a` from the joint names; returns the H-Anim joints no name matched (HumanoidRoot when the thighs share no
+// parent, vc4 when the neck does not hang from the root).
 std::vector<std::string> anatomy_by_name(const BvhMotion& motion, Anatomy& a, std::string& family) {
   const NameIndex index(motion);
   std::vector<std::string> unmatched;
   auto require = [&](const std::string& hanim, const std::vector<std::string>& candidates) {
     const std::int32_t j = index.find(candidates);
-    if (j < 0) unmatched.push_back(hanim + " (tried " + joined(candidates) + ")");
+    if (j < 0) unmatched.push_back(hanim);
     return j;
   };
   // Limbs, per side: Poser's one-letter prefix, then the "Left"/"Right" word of the other families.
@@ -213,18 +208,14 @@ std::vector<std::string> anatomy_by_name(const BvhMotion& motion, Anatomy& a, st
   a.head = require("skullbase", {"head"});
   if (!unmatched.empty()) return unmatched;
 
-  auto name_of = [&](std::int32_t j) { return motion.joints[static_cast<std::size_t>(j)].name; };
   // The root: the hips by name, else the nearest joint both thighs hang from (a root called anything).
   std::int32_t root = index.find({"hips", "hip", "pelvis"});
   if (root < 0 || !index.is_ancestor(root, a.sides[0].hip) || !index.is_ancestor(root, a.sides[1].hip)) {
     root = motion.joints[static_cast<std::size_t>(a.sides[0].hip)].parent;
     while (root >= 0 && !index.is_ancestor(root, a.sides[1].hip)) root = motion.joints[static_cast<std::size_t>(root)].parent;
-    if (root < 0)
-      return {"HumanoidRoot (the thighs '" + name_of(a.sides[0].hip) + "' and '" + name_of(a.sides[1].hip) +
-              "' share no parent joint)"};
+    if (root < 0) return {"HumanoidRoot"};
   }
-  if (!index.is_ancestor(root, a.neck))
-    return {"vc4 (the neck '" + name_of(a.neck) + "' does not hang from the hips '" + name_of(root) + "')"};
+  if (!index.is_ancestor(root, a.neck)) return {"vc4"};
   a.root = root;
   // The spine by position: the joints strictly between the root and the neck, lowest first.
   std::vector<std::int32_t> spine;
@@ -290,7 +281,7 @@ BvhNaming recognise_bvh_naming(const BvhMotion& motion) {
   std::string hanim;
   for (const std::string& u : unmatched) {
     if (!hanim.empty()) hanim += ", ";
-    hanim += u.substr(0, u.find(' '));
+    hanim += u;
   }
   throw std::invalid_argument("retarget: " + motion.source + ": cannot map the capture's joints: no joint name matched " +
                               hanim + " (families known: Poser/DAZ, CMU, Mixamo, HumanIK), and by shape: " + why +
