@@ -7,11 +7,15 @@
 #include "io/hanim_loader.h"
 #include "rig/binding.h"
 #include "rig/body_generator.h"
+#include "tests/sanitizer_scale.h"
 
 namespace strata {
 namespace {
 
-constexpr float kSeconds = 2.5f, kFps = 60.0f;
+// Under the sanitizers the same 2.5 s are sampled at 20 fps (tests/sanitizer_scale.h): every code path, a third
+// of the frames.
+constexpr float kSeconds = 2.5f, kFps = static_cast<float>(test::trials_for_build(60, 3));
+constexpr unsigned kFrames = static_cast<unsigned>(kSeconds * kFps);
 
 TEST(SkinWalk, NoTriangleInvertsOverTheDefaultWalkAtAnyLevel) {
   const Rig rig = to_rig(load_default_humanoid());
@@ -19,7 +23,7 @@ TEST(SkinWalk, NoTriangleInvertsOverTheDefaultWalkAtAnyLevel) {
     const Mesh& mesh = default_body().levels[static_cast<std::size_t>(l)];
     const BodyLevel level{mesh, bind_three_step(mesh, rig.skeleton, default_binding_tables())};
     const WalkSkinMetrics walk = measure_walk_skin(rig, level, kSeconds, kFps);
-    EXPECT_EQ(walk.frames, 150u);
+    EXPECT_EQ(walk.frames, kFrames);
     EXPECT_EQ(walk.inverted_triangles, 0u) << "level " << l << ": worst at frame " << walk.worst_frame;
     EXPECT_EQ(walk.seam_gap_max_m, 0.0) << "level " << l;
     EXPECT_EQ(walk.nan_count, 0u) << "level " << l;

@@ -23,11 +23,13 @@
 #include "scene/body_settings.h"
 #include "scene/spawn.h"
 #include "scene/step.h"
+#include "tests/sanitizer_scale.h"
 
 namespace strata {
 namespace {
 
-constexpr int kTrials = 10000;
+// 10,000 in Release; a fifth under the sanitizers (tests/sanitizer_scale.h).
+constexpr int kTrials = test::trials_for_build(10000, 5);
 
 bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 bool finite(const glm::quat& q) {
