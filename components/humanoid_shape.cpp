@@ -1,6 +1,8 @@
 #include "components/humanoid_shape.h"
 
 #include <algorithm>
+#include <cctype>
+#include <initializer_list>
 #include <string_view>
 
 #include <glm/geometric.hpp>
@@ -156,16 +158,134 @@ std::string find_humanoid_by_shape(std::span<const std::int32_t> parents, std::s
   return {};
 }
 
-bool name_joints_by_shape(Skeleton& skeleton, std::string* why) {
+std::string normalised_joint_name(std::string_view name) {
+  const std::size_t colon = name.rfind(':');
+  if (colon != std::string_view::npos) name.remove_prefix(colon + 1);
+  std::string out(name);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+// The families' names, per H-Anim joint, tried in order (motion/bvh_naming.h has the table by family): Poser's
+// one-letter side prefix first, then the "Left"/"Right" word the others share. Compared normalised, so Mixamo's
+// "mixamorig:LeftUpLeg" is "leftupleg". Rejected: a table per family tried in turn, which refuses the many files
+// that mix families' names (a MotionBuilder export with 3ds Max leg names).
+std::vector<std::string> find_humanoid_by_names(std::span<const std::int32_t> parents,
+                                                std::span<const std::string> joint_names, HumanoidShape& a,
+                                                std::string& family) {
+  const std::size_t n = parents.size();
+  if (joint_names.size() != n) return {"HumanoidRoot"};
+  std::vector<std::string> names(n);
+  for (std::size_t j = 0; j < n; ++j) names[j] = normalised_joint_name(joint_names[j]);
+  auto find = [&](std::initializer_list<std::string> candidates) -> std::int32_t {
+    for (const std::string& c : candidates)
+      for (std::size_t j = 0; j < n; ++j)
+        if (names[j] == c) return static_cast<std::int32_t>(j);
+    return -1;
+  };
+  auto has = [&](std::string_view name) { return std::find(names.begin(), names.end(), name) != names.end(); };
+  auto is_ancestor = [&](std::int32_t ancestor, std::int32_t j) {
+    for (std::size_t steps = 0; j >= 0 && static_cast<std::size_t>(j) < n && steps <= n; ++steps) {
+      if (j == ancestor) return true;
+      j = parents[static_cast<std::size_t>(j)];
+    }
+    return false;
+  };
+  std::vector<std::string> unmatched;
+  auto require = [&](const std::string& hanim, std::initializer_list<std::string> candidates) {
+    const std::int32_t j = find(candidates);
+    if (j < 0) unmatched.push_back(hanim);
+    return j;
+  };
+  HumanoidShape found;
+  for (int s = 0; s < 2; ++s) {
+    const std::string p = s == 0 ? "l" : "r", w = s == 0 ? "left" : "right", h = s == 0 ? "l_" : "r_";
+    HumanoidShape::Side& side = found.sides[s];
+    side.collar = require(h + "sternoclavicular", {p + "collar", w + "shoulder", w + "collar", w + "clavicle"});
+    side.shoulder = require(h + "shoulder", {p + "shldr", w + "arm", w + "upperarm"});
+    side.elbow = require(h + "elbow", {p + "forearm", w + "forearm", w + "lowerarm"});
+    side.wrist = require(h + "wrist", {p + "hand", w + "hand"});
+    side.hip = require(h + "hip", {p + "thigh", w + "upleg", w + "hip", w + "thigh", w + "upperleg"});
+    side.knee = require(h + "knee", {p + "shin", w + "leg", w + "knee", w + "lowerleg", w + "calf"});
+    side.ankle = require(h + "ankle", {p + "foot", w + "foot", w + "ankle"});
+    side.toe = find({p + "toe", w + "toebase", w + "toe"});
+    // The hand's direction: its middle finger where there is one.
+    side.hand_aim = find({p + "mid1", w + "handmiddle1", w + "middle1", w + "handmiddle", w + "fingerbase"});
+    if (side.hand_aim >= 0 && side.wrist >= 0 && !is_ancestor(side.wrist, side.hand_aim)) side.hand_aim = -1;
+    if (side.toe >= 0 && side.ankle >= 0 && !is_ancestor(side.ankle, side.toe)) side.toe = -1;
+  }
+  found.neck = require("vc4", {"neck", "neck1"});
+  found.head = require("skullbase", {"head"});
+  if (!unmatched.empty()) return unmatched;
+
+  // The pelvis: the hips by name, else the nearest joint both thighs hang from (a root called anything).
+  std::int32_t pelvis = find({"hips", "hip", "pelvis"});
+  if (pelvis < 0 || !is_ancestor(pelvis, found.sides[0].hip) || !is_ancestor(pelvis, found.sides[1].hip)) {
+    pelvis = parents[static_cast<std::size_t>(found.sides[0].hip)];
+    while (pelvis >= 0 && !is_ancestor(pelvis, found.sides[1].hip)) pelvis = parents[static_cast<std::size_t>(pelvis)];
+    if (pelvis < 0) return {"HumanoidRoot"};
+  }
+  if (!is_ancestor(pelvis, found.neck)) return {"vc4"};
+  found.pelvis = pelvis;
+  // The spine by position: the joints strictly between the pelvis and the neck, lowest first.
+  std::vector<std::int32_t> spine;
+  for (std::int32_t j = parents[static_cast<std::size_t>(found.neck)]; j >= 0 && j != pelvis;
+       j = parents[static_cast<std::size_t>(j)])
+    spine.insert(spine.begin(), j);
+  if (!spine.empty()) found.vl5 = spine.front();
+  if (spine.size() >= 2) found.vt6 = spine.back();
+
+  // The family, for the user: told by the names only one family uses.
+  bool prefixed = false;
+  for (const std::string& name : joint_names)
+    prefixed |= name.find(':') != std::string::npos && normalised_joint_name(name.substr(0, 9)) == "mixamorig";
+  const std::string& thigh = names[static_cast<std::size_t>(found.sides[0].hip)];
+  if (prefixed)
+    family = "Mixamo";
+  else if (thigh == "lthigh")
+    family = "Poser/DAZ";
+  else if (has("lhipjoint") || has("lowerback"))
+    family = thigh == "lefthip" ? "CMU (3ds Max)" : "CMU (MotionBuilder)";
+  else if (thigh == "leftupleg")
+    family = "HumanIK";
+  else
+    family = "generic (Left/Right names)";
+  a = found;
+  return {};
+}
+
+bool name_humanoid_joints(Skeleton& skeleton, std::string* why) {
   auto say = [&](std::string text) {
     if (why) *why = std::move(text);
     return false;
   };
   if (skeleton.find_joint("l_hip") >= 0 && skeleton.find_joint("l_shoulder") >= 0)
     return say("the skeleton already has H-Anim limb names");
+  // Names first: a rig exported from a known tool says what its joints are, where the shape rules only infer it
+  // (and infer wrongly on a rig posed far from a T or A pose). The names are the file's own (source_joint_names).
   HumanoidShape shape;
-  const std::string problem = find_humanoid_by_shape(skeleton.parents, skeleton.centers, {}, shape);
-  if (!problem.empty()) return say(problem);
+  std::string family;
+  std::string how;
+  // The limbs the IK builds must be parent-child chains; a rig with roll helpers between its named upper arm and
+  // forearm is left to the shape rules, which take the helper the forearm hangs from as the shoulder.
+  auto chains_direct = [&](const HumanoidShape& h) {
+    for (const HumanoidShape::Side& d : h.sides)
+      if (skeleton.parents[static_cast<std::size_t>(d.knee)] != d.hip ||
+          skeleton.parents[static_cast<std::size_t>(d.ankle)] != d.knee ||
+          skeleton.parents[static_cast<std::size_t>(d.elbow)] != d.shoulder ||
+          skeleton.parents[static_cast<std::size_t>(d.wrist)] != d.elbow)
+        return false;
+    return true;
+  };
+  if (find_humanoid_by_names(skeleton.parents, skeleton.source_joint_names, shape, family).empty() &&
+      chains_direct(shape)) {
+    how = "by their " + family + " names";
+  } else {
+    shape = HumanoidShape{};
+    const std::string problem = find_humanoid_by_shape(skeleton.parents, skeleton.centers, {}, shape);
+    if (!problem.empty()) return say("its joint names are no known family's, and by shape: " + problem);
+    how = std::string("by the skeleton's shape") + (shape.facing_assumed ? " (facing +Z assumed)" : "");
+  }
   std::vector<std::pair<std::int32_t, std::string>> names;
   // The pelvis is the root's name when it is the root; below another root (an armature, a synthetic skin root) it
   // is the sacroiliac the legs hang from, as in H-Anim.
@@ -201,8 +321,7 @@ bool name_joints_by_shape(Skeleton& skeleton, std::string* why) {
     list += skeleton.source_joint_names[static_cast<std::size_t>(joint)] + " -> " + name;
   }
   skeleton.joint_names = std::move(renamed);
-  skeleton.warnings.push_back(skeleton.source + ": joints named by the skeleton's shape" +
-                              (shape.facing_assumed ? " (facing +Z assumed)" : "") + ": " + list);
+  skeleton.warnings.push_back(skeleton.source + ": joints named " + how + ": " + list);
   if (why) why->clear();
   return true;
 }

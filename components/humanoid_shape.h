@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -17,6 +18,7 @@ struct Skeleton;
 struct HumanoidShape {
   struct Side {
     std::int32_t collar = -1, shoulder = -1, elbow = -1, wrist = -1, hip = -1, knee = -1, ankle = -1, toe = -1;
+    std::int32_t hand_aim = -1;  // by name only: the middle finger's base, the hand's direction (-1 when absent)
   };
   std::int32_t pelvis = -1;  // where the legs and the spine branch
   std::int32_t vl5 = -1;     // lowest spine joint above the pelvis (-1 when the neck hangs straight off it)
@@ -32,11 +34,24 @@ struct HumanoidShape {
 std::string find_humanoid_by_shape(std::span<const std::int32_t> parents, std::span<const glm::vec3> rest,
                                    std::span<const glm::vec3> tips, HumanoidShape& out);
 
+// A name as compared: lower case, without anything up to a ':' (Mixamo's "mixamorig:" and the like).
+std::string normalised_joint_name(std::string_view name);
+
+// Finds the joints by the names motion-capture and rigging tools give them (motion/bvh_naming.h lists the
+// families: Poser/DAZ, CMU in both forms, Mixamo, HumanIK and other Left/Right names). The spine goes by position:
+// vl5 is the lowest joint between the pelvis and the neck, vt6 the one the neck hangs from. Returns the H-Anim
+// names of the joints no name matched (empty on success, `out` then filled and `family` naming the family).
+std::vector<std::string> find_humanoid_by_names(std::span<const std::int32_t> parents,
+                                                std::span<const std::string> names, HumanoidShape& out,
+                                                std::string& family);
+
 // Gives a rig whose joints carry no H-Anim names (a glTF or other skin) the H-Anim names the engine's limbs, walk
-// generator and retargeting look for (HumanoidRoot or sacroiliac, vl5, vt6, vc4, skullbase, and per side
-// sternoclavicular, shoulder, elbow, wrist, hip, knee, ankle, midtarsal), found by shape. joint_names change,
-// source_joint_names keep the file's names. Returns false (and leaves the skeleton as it was) when the skeleton
-// already has H-Anim limb names or its shape is not a humanoid's; `why` then says which.
-bool name_joints_by_shape(Skeleton& skeleton, std::string* why = nullptr);
+// generator and retargeting look for: by the joints' own names where they are a known family's (a Mixamo or
+// HumanIK rig), else by the skeleton's shape. The names given: HumanoidRoot or sacroiliac, vl5, vt6, vc4,
+// skullbase, and per side sternoclavicular, shoulder, elbow, wrist, hip, knee, ankle, midtarsal. joint_names
+// change, source_joint_names keep the file's names, and a warning lists the map and how it was found. Returns false
+// (and leaves the skeleton as it was) when the skeleton already has H-Anim limb names or neither its names nor its
+// shape are a humanoid's; `why` then says which.
+bool name_humanoid_joints(Skeleton& skeleton, std::string* why = nullptr);
 
 }  // namespace strata

@@ -483,9 +483,10 @@ class GltfReader {
       for (auto c = children[k].rbegin(); c != children[k].rend(); ++c) stack.emplace_back(*c, j);
     }
     // A skin's joints carry the exporter's names, or none (CesiumMan): where they are not H-Anim's, the limbs, the
-    // walk generator and retargeting find them by the skeleton's shape (components/humanoid_shape.h). A skin that
-    // is no humanoid (RiggedSimple's two-bone cylinder) keeps its names and plays its own clips.
-    name_joints_by_shape(s);
+    // walk generator and retargeting find them by a known family's names (Mixamo, HumanIK, ...), else by the
+    // skeleton's shape (components/humanoid_shape.h). A skin that is no humanoid (RiggedSimple's two-bone
+    // cylinder) keeps its names and plays its own clips.
+    name_humanoid_joints(s);
   }
 
   void read_mesh(const tinygltf::Mesh& gmesh, ImportedBody& body) {

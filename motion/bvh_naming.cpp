@@ -13,17 +13,9 @@
 
 namespace strata {
 
-std::string normalised_joint_name(std::string_view name) {
-  const std::size_t colon = name.rfind(':');
-  if (colon != std::string_view::npos) name.remove_prefix(colon + 1);
-  std::string out(name);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
 namespace {
 
-// The BVH's joint names, normalised once; lookups by the first of several candidate names.
+// The BVH's joint names, normalised once (for the map file's hanging check).
 struct NameIndex {
   const BvhMotion& motion;
   std::vector<std::string> names;
@@ -79,6 +71,18 @@ struct Anatomy {
   std::int32_t root = -1, vl5 = -1, vt6 = -1, neck = -1, head = -1;
   Side sides[2];  // left, right
 };
+
+Anatomy anatomy_of(const HumanoidShape& found) {
+  Anatomy a;
+  a.root = found.pelvis, a.vl5 = found.vl5, a.vt6 = found.vt6, a.neck = found.neck, a.head = found.head;
+  for (int s = 0; s < 2; ++s) {
+    const HumanoidShape::Side& d = found.sides[s];
+    Anatomy::Side& side = a.sides[s];
+    side.collar = d.collar, side.shoulder = d.shoulder, side.elbow = d.elbow, side.wrist = d.wrist;
+    side.hand_aim = d.hand_aim, side.hip = d.hip, side.knee = d.knee, side.ankle = d.ankle, side.toe = d.toe;
+  }
+  return a;
+}
 
 std::vector<std::vector<std::int32_t>> children_of(const BvhMotion& m) {
   std::vector<std::vector<std::int32_t>> out(m.joint_count());
@@ -180,67 +184,16 @@ BvhNaming finish(const BvhMotion& motion, Anatomy a, std::string family) {
 // Fills `a` from the joint names; returns the H-Anim joints no name matched (HumanoidRoot when the thighs share no
 // parent, vc4 when the neck does not hang from the root).
 std::vector<std::string> anatomy_by_name(const BvhMotion& motion, Anatomy& a, std::string& family) {
-  const NameIndex index(motion);
-  std::vector<std::string> unmatched;
-  auto require = [&](const std::string& hanim, const std::vector<std::string>& candidates) {
-    const std::int32_t j = index.find(candidates);
-    if (j < 0) unmatched.push_back(hanim);
-    return j;
-  };
-  // Limbs, per side: Poser's one-letter prefix, then the "Left"/"Right" word of the other families.
-  for (int s = 0; s < 2; ++s) {
-    const std::string p = s == 0 ? "l" : "r", w = s == 0 ? "left" : "right", h = s == 0 ? "l_" : "r_";
-    Anatomy::Side& side = a.sides[s];
-    side.collar = require(h + "sternoclavicular", {p + "collar", w + "shoulder", w + "collar", w + "clavicle"});
-    side.shoulder = require(h + "shoulder", {p + "shldr", w + "arm", w + "upperarm"});
-    side.elbow = require(h + "elbow", {p + "forearm", w + "forearm", w + "lowerarm"});
-    side.wrist = require(h + "wrist", {p + "hand", w + "hand"});
-    side.hip = require(h + "hip", {p + "thigh", w + "upleg", w + "hip", w + "thigh", w + "upperleg"});
-    side.knee = require(h + "knee", {p + "shin", w + "leg", w + "knee", w + "lowerleg", w + "calf"});
-    side.ankle = require(h + "ankle", {p + "foot", w + "foot", w + "ankle"});
-    side.toe = index.find({p + "toe", w + "toebase", w + "toe"});
-    // The hand's direction: its middle finger where the file has one, else its first child or End Site.
-    side.hand_aim = index.find({p + "mid1", w + "handmiddle1", w + "middle1", w + "handmiddle", w + "fingerbase"});
-    if (side.hand_aim >= 0 && side.wrist >= 0 && !index.is_ancestor(side.wrist, side.hand_aim)) side.hand_aim = -1;
-    if (side.toe >= 0 && side.ankle >= 0 && !index.is_ancestor(side.ankle, side.toe)) side.toe = -1;
+  std::vector<std::int32_t> parents(motion.joint_count());
+  std::vector<std::string> names(motion.joint_count());
+  for (std::size_t j = 0; j < motion.joint_count(); ++j) {
+    parents[j] = motion.joints[j].parent;
+    names[j] = motion.joints[j].name;
   }
-  a.neck = require("vc4", {"neck", "neck1"});
-  a.head = require("skullbase", {"head"});
-  if (!unmatched.empty()) return unmatched;
-
-  // The root: the hips by name, else the nearest joint both thighs hang from (a root called anything).
-  std::int32_t root = index.find({"hips", "hip", "pelvis"});
-  if (root < 0 || !index.is_ancestor(root, a.sides[0].hip) || !index.is_ancestor(root, a.sides[1].hip)) {
-    root = motion.joints[static_cast<std::size_t>(a.sides[0].hip)].parent;
-    while (root >= 0 && !index.is_ancestor(root, a.sides[1].hip)) root = motion.joints[static_cast<std::size_t>(root)].parent;
-    if (root < 0) return {"HumanoidRoot"};
-  }
-  if (!index.is_ancestor(root, a.neck)) return {"vc4"};
-  a.root = root;
-  // The spine by position: the joints strictly between the root and the neck, lowest first.
-  std::vector<std::int32_t> spine;
-  for (std::int32_t j = motion.joints[static_cast<std::size_t>(a.neck)].parent; j >= 0 && j != root;
-       j = motion.joints[static_cast<std::size_t>(j)].parent)
-    spine.insert(spine.begin(), j);
-  if (!spine.empty()) a.vl5 = spine.front();
-  if (spine.size() >= 2) a.vt6 = spine.back();
-
-  // The family, for the user: told by the names that only one family uses.
-  bool prefixed = false;
-  for (const BvhJoint& j : motion.joints) prefixed |= j.name.find(':') != std::string::npos &&
-                                                      normalised_joint_name(j.name.substr(0, 9)) == "mixamorig";
-  const std::string thigh = index.names[static_cast<std::size_t>(a.sides[0].hip)];
-  if (prefixed)
-    family = "Mixamo";
-  else if (thigh == "lthigh")
-    family = "Poser/DAZ";
-  else if (index.has("lhipjoint") || index.has("lowerback"))
-    family = thigh == "lefthip" ? "CMU (3ds Max)" : "CMU (MotionBuilder)";
-  else if (thigh == "leftupleg")
-    family = "HumanIK";
-  else
-    family = "generic (Left/Right names)";
-  return {};
+  HumanoidShape found;
+  std::vector<std::string> unmatched = find_humanoid_by_names(parents, names, found, family);
+  if (unmatched.empty()) a = anatomy_of(found);
+  return unmatched;
 }
 
 // ---- by shape ----------------------------------------------------------------------------------------------------
@@ -257,13 +210,7 @@ std::string anatomy_by_shape(const BvhMotion& motion, Anatomy& a, std::string& f
   HumanoidShape shape;
   const std::string why = find_humanoid_by_shape(parents, rest, tips, shape);
   if (!why.empty()) return why;
-  a.root = shape.pelvis, a.vl5 = shape.vl5, a.vt6 = shape.vt6, a.neck = shape.neck, a.head = shape.head;
-  for (int s = 0; s < 2; ++s) {
-    const HumanoidShape::Side& d = shape.sides[s];
-    Anatomy::Side& side = a.sides[s];
-    side.collar = d.collar, side.shoulder = d.shoulder, side.elbow = d.elbow, side.wrist = d.wrist;
-    side.hip = d.hip, side.knee = d.knee, side.ankle = d.ankle, side.toe = d.toe;
-  }
+  a = anatomy_of(shape);
   family = shape.facing_assumed ? "by shape (names not recognised; facing +Z assumed)" : "by shape (names not recognised)";
   return {};
 }

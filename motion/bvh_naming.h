@@ -20,6 +20,7 @@
 
 #include <glm/mat3x3.hpp>
 
+#include "components/humanoid_shape.h"  // normalised_joint_name, the families' names
 #include "io/bvh.h"
 #include "io/retarget_map_file.h"
 #include "motion/retarget.h"
@@ -50,7 +51,5 @@ BvhNaming bvh_naming_from_map(const BvhMotion& motion, const RetargetMapFile& fi
 // and up direction (root to neck), each snapped to the nearest signed axis; identity when they are degenerate.
 glm::mat3 bvh_file_axes(const glm::vec3& left, const glm::vec3& up);
 
-// A name as compared: lower case, without anything up to a ':' (Mixamo's "mixamorig:" and the like).
-std::string normalised_joint_name(std::string_view name);
 
 }  // namespace strata

@@ -63,8 +63,8 @@ Crowd::Crowd(Rig r) {
   try {
     motion.locomotion = std::make_unique<const LocomotionRig>(make_locomotion_rig(rig().skeleton));
   } catch (const std::exception& e) {
-    // Said in the rig's terms, not the limb builder's: which joints the walk needs that the rig lacks, and why the
-    // shape rules (components/humanoid_shape.h) could not find them either.
+    // Said in the rig's terms, not the limb builder's: which joints the walk needs that the rig lacks, and why
+    // neither the families' names nor the shape rules (components/humanoid_shape.h) found them.
     const Skeleton& s = rig().skeleton;
     std::string missing;
     for (const char* joint : {"l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle", "l_shoulder", "l_elbow",
@@ -76,7 +76,7 @@ Crowd::Crowd(Rig r) {
       HumanoidShape shape;
       const std::string why = find_humanoid_by_shape(s.parents, s.centers, {}, shape);
       motion.walk_error = "'" + rig().name + "' cannot walk: it has no " + missing +
-                          (why.empty() ? std::string() : " (and by shape: " + why + ")");
+                          (why.empty() ? std::string() : " (its joint names are no known family's, and by shape: " + why + ")");
     }
   }
   // Rest height for projected sizes: the body's, else the skeleton's joint span plus a head's worth.

@@ -1,5 +1,6 @@
-// Finding a humanoid's joints by shape (components/humanoid_shape.h) on small skeletons written here: a Mixamo-like
-// rig facing -Z with helper joints, a rig already named, and trees that are no humanoid.
+// Finding a humanoid's joints by shape and by name (components/humanoid_shape.h) on small skeletons written here:
+// a Mixamo-like rig facing -Z with helper joints (with unknown names and with Mixamo's), a rig already named, and
+// trees that are no humanoid.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -56,7 +57,7 @@ Skeleton foreign_rig() {
 TEST(HumanoidShape, NamesAForeignRigFromItsShape) {
   Skeleton s = foreign_rig();
   std::string why;
-  ASSERT_TRUE(name_joints_by_shape(s, &why)) << why;
+  ASSERT_TRUE(name_humanoid_joints(s, &why)) << why;
   auto named = [&](const char* hanim) {
     const std::int32_t j = s.find_joint(hanim);
     return j < 0 ? std::string("(none)") : s.source_joint_names[static_cast<std::size_t>(j)];
@@ -82,19 +83,76 @@ TEST(HumanoidShape, NamesAForeignRigFromItsShape) {
   EXPECT_NE(s.warnings.back().find("joints named by the skeleton's shape"), std::string::npos);
 }
 
+// The foreign rig's joints given Mixamo's names (with its "mixamorig:" prefix), left side first.
+Skeleton mixamo_named(Skeleton s, bool keep_roll_helpers) {
+  const std::pair<const char*, const char*> names[] = {
+      {"P", "Hips"}, {"S1", "Spine"}, {"S2", "Spine2"}, {"N", "Neck"}, {"H", "Head"}, {"EyeA", "LeftEye"},
+      {"EyeB", "RightEye"}, {"CA", "LeftShoulder"}, {"UA", "LeftArm"}, {"TA", "LeftArmRoll"}, {"FA", "LeftForeArm"},
+      {"WA", "LeftHand"}, {"MA", "LeftHandMiddle1"}, {"CB", "RightShoulder"}, {"UB", "RightArm"},
+      {"TB", "RightArmRoll"}, {"FB", "RightForeArm"}, {"WB", "RightHand"}, {"MB", "RightHandMiddle1"},
+      {"L1A", "LeftUpLeg"}, {"L2A", "LeftLeg"}, {"L3A", "LeftFoot"}, {"L4A", "LeftToeBase"}, {"L1B", "RightUpLeg"},
+      {"L2B", "RightLeg"}, {"L3B", "RightFoot"}, {"L4B", "RightToeBase"}};
+  for (std::size_t j = 0; j < s.joint_names.size(); ++j)
+    for (const auto& [from, to] : names)
+      if (s.joint_names[j] == from) s.joint_names[j] = s.source_joint_names[j] = std::string("mixamorig:") + to;
+  if (!keep_roll_helpers) {
+    // Without the zero-length roll helpers (as Mixamo exports): the forearm hangs from the upper arm.
+    for (std::size_t j = 0; j < s.joint_names.size(); ++j) {
+      const std::string& n = s.joint_names[j];
+      if (n.find("ForeArm") != std::string::npos) s.parents[j] = s.parents[static_cast<std::size_t>(s.parents[j])];
+    }
+  }
+  return s;
+}
+
+TEST(HumanoidShape, NamesAMixamoRigByItsNamesAndFallsBackToTheShape) {
+  Skeleton s = mixamo_named(foreign_rig(), false);
+  std::string why;
+  ASSERT_TRUE(name_humanoid_joints(s, &why)) << why;
+  auto named = [&](const char* hanim) {
+    const std::int32_t j = s.find_joint(hanim);
+    return j < 0 ? std::string("(none)") : s.source_joint_names[static_cast<std::size_t>(j)];
+  };
+  EXPECT_EQ(named("HumanoidRoot"), "mixamorig:Hips");
+  EXPECT_EQ(named("vl5"), "mixamorig:Spine");
+  EXPECT_EQ(named("vt6"), "mixamorig:Spine2");
+  EXPECT_EQ(named("vc4"), "mixamorig:Neck");
+  EXPECT_EQ(named("l_sternoclavicular"), "mixamorig:LeftShoulder");
+  EXPECT_EQ(named("l_shoulder"), "mixamorig:LeftArm");
+  EXPECT_EQ(named("l_elbow"), "mixamorig:LeftForeArm");
+  EXPECT_EQ(named("r_wrist"), "mixamorig:RightHand");
+  EXPECT_EQ(named("l_knee"), "mixamorig:LeftLeg");
+  EXPECT_EQ(named("r_midtarsal"), "mixamorig:RightToeBase");
+  EXPECT_NE(s.warnings.back().find("joints named by their Mixamo names"), std::string::npos) << s.warnings.back();
+
+  // Named the same, but with roll helpers between upper arm and forearm: the named shoulder is not the forearm's
+  // parent, so the limbs could not be built from the names; the shape rules name the rig instead.
+  Skeleton helpers = mixamo_named(foreign_rig(), true);
+  ASSERT_TRUE(name_humanoid_joints(helpers, &why)) << why;
+  EXPECT_EQ(helpers.source_joint_names[static_cast<std::size_t>(helpers.find_joint("l_shoulder"))],
+            "mixamorig:LeftArmRoll");
+  EXPECT_NE(helpers.warnings.back().find("joints named by the skeleton's shape"), std::string::npos);
+
+  // Names of no family, on a shape that is no humanoid: both reasons are given.
+  Skeleton chain = foreign_rig();
+  chain.parents.resize(3), chain.centers.resize(3), chain.joint_names.resize(3), chain.source_joint_names.resize(3);
+  EXPECT_FALSE(name_humanoid_joints(chain, &why));
+  EXPECT_NE(why.find("joint names are no known family's"), std::string::npos) << why;
+}
+
 TEST(HumanoidShape, LeavesNamedRigsAndNonHumanoidsAlone) {
   Skeleton named = foreign_rig();
-  ASSERT_TRUE(name_joints_by_shape(named));
+  ASSERT_TRUE(name_humanoid_joints(named));
   const std::vector<std::string> before = named.joint_names;
   std::string why;
-  EXPECT_FALSE(name_joints_by_shape(named, &why));
+  EXPECT_FALSE(name_humanoid_joints(named, &why));
   EXPECT_EQ(why, "the skeleton already has H-Anim limb names");
   EXPECT_EQ(named.joint_names, before);
 
   // A chain (RiggedSimple's two-bone cylinder) and a star with no spine branch.
   Skeleton chain = foreign_rig();
   chain.parents.resize(3), chain.centers.resize(3), chain.joint_names.resize(3), chain.source_joint_names.resize(3);
-  EXPECT_FALSE(name_joints_by_shape(chain, &why));
+  EXPECT_FALSE(name_humanoid_joints(chain, &why));
   EXPECT_NE(why.find("no joint where the legs and the spine branch"), std::string::npos) << why;
   EXPECT_EQ(chain.joint_names, (std::vector<std::string>{"P", "S1", "S2"}));
 
