@@ -14,6 +14,7 @@
 #include "components/walker.h"
 #include "motion/gait.h"
 #include "systems/agent_move.h"
+#include "systems/ik.h"
 
 namespace strata {
 namespace {
@@ -336,7 +337,8 @@ GaitClock finish_clock(const GaitParameters& gp, const GroundTrack& track, Colum
 }
 
 GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source, const GaitRef& g, float& time,
-                             ColumnView<float> placement, std::size_t i, float dt, const GaitStyle& style) {
+                             ColumnView<float> placement, std::size_t i, float dt, const GaitStyle& style,
+                             float hurry = 1.0f) {
   time += dt;
   const float scale = g[kGaitHeight] / rig.rig_height;
   GroundTrack track;
@@ -361,7 +363,7 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
       track.stop_distance = track.speed * track.speed / (2.0f * style.agent_braking);
     g[kGaitCadenceTarget] = g[kGaitCadence] = agent_cadence(track.speed, g[kGaitHeight], style);
     const GaitParameters gp = current_gait(g);
-    if (g[kGaitIdle] <= 0.0f) g[kGaitPhase] = frac(g[kGaitPhase] + dt / gp.cycle_time);
+    if (g[kGaitIdle] <= 0.0f) g[kGaitPhase] = frac(g[kGaitPhase] + hurry * dt / gp.cycle_time);
     g[kGaitDistance] += track.speed * dt;
     track.distance = g[kGaitDistance];
     track.speed_ratio = std::clamp(track.speed / gp.speed, 0.0f, 1.0f);
@@ -396,7 +398,15 @@ bool agent_wants_to_stand(const ColumnView<const float>& agent, std::size_t i, c
 void walk_one(const LocomotionRig& rig, const TrackSource& source, const LocomotionColumns& lanes, std::size_t i,
               float dt, const GaitStyle& base_style) {
   GaitRef g{lanes.gait.base, lanes.gait.stride, i};
-  const GaitClock clock = advance_gait_clock(rig, source, g, lanes.time.at(0, i), lanes.placement, i, dt, base_style);
+  // Agents: a stance leg IK could not bring to its planted foot last frame ends its stance sooner (stance_hurry).
+  float hurry = 1.0f;
+  if (source.agents() && lanes.ik_flags.components != 0)
+    for (int leg = 0; leg < 2; ++leg)
+      if (g.leg(leg, kLegSwinging) < 0.5f &&
+          (lanes.ik_flags.at(static_cast<std::uint32_t>(leg), i) & (kIkUnreachable | kIkLimitsInfeasible)) != 0u)
+        hurry = base_style.stance_hurry;
+  const GaitClock clock =
+      advance_gait_clock(rig, source, g, lanes.time.at(0, i), lanes.placement, i, dt, base_style, hurry);
   // An agent stepping slower than its cadence's speed rolls off its toes less: a full 63-degree toe-off under a
   // body that hardly moves forward asks the ankle for more plantarflexion than it has, and IK's clamp then pivots
   // the foot on the ground (measured: 5 cm of toe-tip slide while stopping).
@@ -837,7 +847,7 @@ bool gait_state_valid(const ColumnView<float>& gait, std::size_t i) {
 // Path mode needs a path; agent mode (agent view set) needs the agent view's width and rows.
 bool track_source_fits(const LocomotionColumns& c, std::span<const CardinalSpline> paths, std::size_t count) {
   if (c.agent.components == 0) return !paths.empty();
-  return c.agent.fits(count, kAgentFloats);
+  return c.agent.fits(count, kAgentFloats) && (c.ik_flags.components == 0 || c.ik_flags.fits(count, kIkLimbs));
 }
 
 TrackSource track_source(const LocomotionColumns& c, std::span<const CardinalSpline> paths) {
@@ -973,8 +983,12 @@ LocomotionColumns locomotion_columns(SoaTable& walkers, bool follow_agents) {
           f32_view(walkers, kWalkerLocalRotation),
           f32_view(walkers, kWalkerIkGoal),
           i32_view(walkers, kWalkerIkMode),
+          {},
           {}};
-  if (follow_agents) c.agent = f32_view(std::as_const(walkers), kWalkerAgent);
+  if (follow_agents) {
+    c.agent = f32_view(std::as_const(walkers), kWalkerAgent);
+    c.ik_flags = u32_view(std::as_const(walkers), kWalkerIkFlags);
+  }
   return c;
 }
 

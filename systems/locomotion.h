@@ -108,6 +108,11 @@ struct GaitStyle {
   float agent_acceleration = 0.8f;
   // Agents: the most a stance foot's heading may differ from the body's before it pivots on its contact (rad).
   float max_foot_twist = 0.5f;
+  // Agents: how much faster the gait phase runs while a stance leg's goal was out of IK's reach in the last frame.
+  // Avoidance moves a body sideways in a jam further than a planted foot's leg reaches before its stance ends;
+  // ending that stance sooner lifts the foot and sets it down under the body, where holding it dragged it along
+  // the ground (issue 16: up to 0.5 m in the scenario reports).
+  float stance_hurry = 3.0f;
   // Agents: a swinging foot re-aims at the newest footprint prediction until this fraction of its swing.
   float retarget_until = 0.8f;
   // Lowest cadence of a walking agent (steps/min): at a crawl the gait formula's cadence falls to 40, slow motion;
@@ -152,9 +157,12 @@ struct LocomotionColumns {
   // Agent mode when set (kAgentFloats, read): the pelvis follows the walker's steered agent (position, velocity,
   // heading) instead of a path, and the walker stands when its agent stops; `path` and the paths are not read.
   ColumnView<const float> agent;
+  // Agent mode, optional (kIkLimbs, read): each limb's IkFlags from the last IK run. A stance leg whose goal IK
+  // could not reach (the body pushed away from the planted foot) hurries its step: GaitStyle::stance_hurry.
+  ColumnView<const std::uint32_t> ik_flags;
 };
 // Views of those columns over every walker of `walkers` (a walker table, components/walker.h); with
-// `follow_agents` the agent view too.
+// `follow_agents` the agent and IK-flag views too.
 LocomotionColumns locomotion_columns(SoaTable& walkers, bool follow_agents = false);
 
 // Places walker `walker` at its gait distance along its path with its gait state consistent with its phase

@@ -60,8 +60,9 @@ struct AgentWalker {
   float agent(std::uint32_t c) { return table().f32(kWalkerAgent, c)[0]; }
   float gait(std::uint32_t c) { return table().f32(kWalkerGait, c)[0]; }
 
-  // One frame with the agent wishing to move at `wish` (m/s, ground x and z).
-  void frame(glm::vec2 wish, float dt) {
+  // One frame with the agent wishing to move at `wish` (m/s, ground x and z); `before_locomotion` may change the
+  // walker's columns between agent_move and locomotion (what the last IK run reported, say).
+  void frame(glm::vec2 wish, float dt, const std::function<void(SoaTable&)>& before_locomotion = {}) {
     Crowd& c = *crowd;
     SoaTable& t = table();
     // As navigation does: the wish goes through what the body can follow; no one to avoid, so avoidance would
@@ -74,6 +75,7 @@ struct AgentWalker {
     t.f32(kWalkerAgent, kAgentOrcaVx)[0] = t.f32(kWalkerAgent, kAgentPrefVx)[0] = pref.x;
     t.f32(kWalkerAgent, kAgentOrcaVz)[0] = t.f32(kWalkerAgent, kAgentPrefVz)[0] = pref.y;
     run_or_throw(make_agent_move_job(t, dt, move), "agent_move");
+    if (before_locomotion) before_locomotion(t);
     run_or_throw(make_locomotion_job(*c.motion.locomotion, c.motion.paths, t, dt, c.motion.style, true), "locomotion");
     run_or_throw(make_ik_job(c.rig().skeleton, c.motion.locomotion->limbs, t), "ik");
     run_or_throw(make_fk_job(c.rig().skeleton, t), "fk");
@@ -179,6 +181,35 @@ TEST(AgentWalk, SlowAgentsTakeShorterStepsNotSlowMotion) {
   // Steps: distance covered per stride is what 0.4 m/s at >= 80 steps/min allows, not the formula's step.
   EXPECT_LT(g.stride_length_mean_m, 0.65);
   EXPECT_GT(g.stride_length_mean_m, 0.4);
+}
+
+// A stance leg whose goal IK could not reach in the last frame (the body pushed away from the planted foot) makes
+// the gait phase run stance_hurry times faster, so that stance ends sooner; the same walker with the leg reached
+// keeps its pace. Two walkers on the same script, one told its stance leg missed.
+TEST(AgentWalk, AStanceLegOutOfReachHurriesItsStep) {
+  AgentWalker plain, pushed;
+  GaitMetrics metrics_plain(plain.crowd->rig().skeleton, *plain.crowd->motion.locomotion, plain.crowd->motion.style);
+  GaitMetrics metrics_pushed(pushed.crowd->rig().skeleton, *pushed.crowd->motion.locomotion, pushed.crowd->motion.style);
+  float clock_plain = 0.0f, clock_pushed = 0.0f;
+  const auto forward = [](float) { return glm::vec2(0.0f, 1.2f); };
+  walk(plain, 1.5f, forward, metrics_plain, clock_plain);
+  walk(pushed, 1.5f, forward, metrics_pushed, clock_pushed);
+  ASSERT_EQ(plain.gait(kGaitPhase), pushed.gait(kGaitPhase));
+  ASSERT_LE(plain.gait(kGaitIdle), 0.0f) << "walking, not standing";
+  int stance = -1;
+  for (int leg = 0; leg < 2 && stance < 0; ++leg)
+    if (plain.gait(kGaitLegs + static_cast<std::uint32_t>(leg) * kLegFloats + kLegSwinging) < 0.5f) stance = leg;
+  ASSERT_GE(stance, 0);
+  const float before = plain.gait(kGaitPhase);
+  const float dt = 1.0f / 60.0f;
+  plain.frame({0.0f, 1.2f}, dt);
+  pushed.frame({0.0f, 1.2f}, dt, [&](SoaTable& t) {
+    t.u32(kWalkerIkFlags, static_cast<std::uint32_t>(stance))[0] = kIkUnreachable;
+  });
+  const auto advance = [&](float after) { return after - before + (after < before ? 1.0f : 0.0f); };
+  const float normal = advance(plain.gait(kGaitPhase)), hurried = advance(pushed.gait(kGaitPhase));
+  ASSERT_GT(normal, 0.0f);
+  EXPECT_NEAR(hurried / normal, plain.crowd->motion.style.stance_hurry, 1e-3f);
 }
 
 TEST(AgentWalk, AgentMoveRefusesNonFiniteVelocities) {
