@@ -1,6 +1,7 @@
 #include "systems/navigation.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <optional>
 #include <utility>
@@ -62,7 +63,31 @@ void steer_one(const SteerJob& job, std::size_t i) {
   // An agent that has reached its final goal (entered its region) and makes no headway to its own point stops
   // there: two agents pressing for points behind each other wait for ever under reciprocal avoidance.
   const bool final_goal = spec.kind != GoalKind::Waypoints && spec.kind != GoalKind::Random;
-  if (final_goal && (job.state.at(kAgentFlags, i) & kAgentArrived) != 0u &&
+  // How far inside its region the agent is (0 outside, or for other goals: no edge to keep clear).
+  const float depth = spec.kind == GoalKind::Region
+                          ? std::max(0.0f, std::min({pos.x - spec.region_min.x, spec.region_max.x - pos.x,
+                                                     pos.y - spec.region_min.y, spec.region_max.y - pos.y}))
+                          : std::numeric_limits<float>::infinity();
+  // Just inside its region and blocked: another point of the region, every settle_after seconds while that lasts.
+  // Settling there (as below) walled the entrance off: in the bottleneck the first agents in stood along the
+  // region's near edge and everyone behind pressed against them for the rest of the run (41 % in after 240 s,
+  // the far side of the region empty).
+  if (spec.kind == GoalKind::Region && (job.state.at(kAgentFlags, i) & kAgentArrived) != 0u &&
+      depth < job.params.settle_depth && job.params.settle_after > 0.0f) {
+    const float since = a.at(kAgentSinceProgress, i);
+    if (since > job.params.settle_after &&
+        std::floor(since / job.params.settle_after) != std::floor((since - job.dt) / job.params.settle_after)) {
+      // The new point lies at least settle_depth inside (where the region is that large), away from the edge.
+      const glm::vec2 inset = glm::min(glm::vec2(job.params.settle_depth), 0.5f * (spec.region_max - spec.region_min));
+      std::uint32_t& rng = job.state.at(kAgentSeed, i);
+      goal = random_in(spec.region_min + inset, spec.region_max - inset, rng);
+      a.at(kAgentGoalX, i) = goal.x;
+      a.at(kAgentGoalZ, i) = goal.y;
+      a.at(kAgentBestDistance, i) = glm::length(goal - pos);
+      c.at(kAgentCorners * 2, i) = 0.0f;
+      job.state.at(kAgentFlags, i) |= kAgentNeedsPath;
+    }
+  } else if (final_goal && (job.state.at(kAgentFlags, i) & kAgentArrived) != 0u &&
       a.at(kAgentSinceProgress, i) > job.params.settle_after && glm::length(goal - pos) > 1e-3f) {
     goal = pos;
     a.at(kAgentGoalX, i) = pos.x;

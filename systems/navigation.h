@@ -39,6 +39,9 @@ struct SteeringParameters {
   float replan_period = 3.0f;   // s between an agent's replans
   float wobble = 0.1f;          // rad: seeded jitter of the wished direction, to break symmetric standoffs
   float settle_after = 2.0f;    // s without headway after reaching a final goal: it stands where it is
+  // A region goal: an agent settles (as above) only this far inside the region; nearer its edge it takes another
+  // point of the region instead, so those who have just come in move on and do not wall the entrance off.
+  float settle_depth = 2.0f;    // m
 };
 
 struct SteerJob {

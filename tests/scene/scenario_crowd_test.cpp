@@ -16,6 +16,7 @@
 #include "scene/state_hash.h"
 #include "scene/step.h"
 #include "systems/gait_metrics.h"
+#include "tests/sanitizer_scale.h"
 
 namespace strata {
 namespace {
@@ -132,6 +133,31 @@ TEST(ScenarioCrowd, RoomEmptiesThroughItsDoor) {
   for (std::size_t s = 0; s < kDetailSlots; ++s) {
     const SoaTable& t = crowd->world.table(crowd->tables[s]);
     for (std::size_t r = 0; r < t.size(); ++r) EXPECT_GT(t.f32(kWalkerAgent, kAgentPx)[r], 5.3f);
+  }
+}
+
+// Agents that have come into their goal region and find no way on take another point deeper in rather than
+// standing at its edge (SteeringParameters::settle_depth): the first ones in do not wall the entrance off. The same
+// room, 50 agents, a region roomy enough for all of them (40 m^2, where 50 bodies need under 20): with the rule
+// everyone is in within 150 s; with it off (settle_depth 0: settle wherever headway stops) the first arrivals stand
+// along the near edge and some never get in.
+TEST(ScenarioCrowd, ArrivalsMoveInRatherThanWallingOffTheRegion) {
+  Scenario s = small_bottleneck(50, 1.6f);
+  s.groups[0].goal.region_min = {7.0f, -4.0f};
+  s.groups[0].goal.region_max = {12.0f, 4.0f};
+  double reached[2] = {0.0, 0.0};
+  // Under the sanitizers only the run with the rule (tests/sanitizer_scale.h): the other only shows it matters.
+  for (int k = 0; k < (test::kSanitizedBuild ? 1 : 2); ++k) {
+    std::unique_ptr<Crowd> crowd = scenario_crowd(s);
+    if (k == 1) crowd->agents->steering.settle_depth = 0.0f;
+    const Outcome o = run(*crowd, 150.0f);
+    EXPECT_EQ(o.crowd.overlaps, 0u);
+    EXPECT_EQ(o.crowd.nan_count, 0u);
+    reached[k] = o.crowd.reached_goal_pct;
+  }
+  EXPECT_DOUBLE_EQ(reached[0], 100.0);
+  if (!test::kSanitizedBuild) {
+    EXPECT_LT(reached[1], 100.0) << "without the rule the same run leaves some outside";
   }
 }
 
