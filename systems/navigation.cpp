@@ -60,25 +60,31 @@ void steer_one(const SteerJob& job, std::size_t i) {
   if (spec.kind == GoalKind::Region && pos.x >= spec.region_min.x && pos.x <= spec.region_max.x &&
       pos.y >= spec.region_min.y && pos.y <= spec.region_max.y)
     job.state.at(kAgentFlags, i) |= kAgentArrived;
-  // An agent that has reached its final goal (entered its region) and makes no headway to its own point stops
-  // there: two agents pressing for points behind each other wait for ever under reciprocal avoidance.
   const bool final_goal = spec.kind != GoalKind::Waypoints && spec.kind != GoalKind::Random;
-  // How far inside its region the agent is (0 outside, or for other goals: no edge to keep clear).
+  const bool arrived = (job.state.at(kAgentFlags, i) & kAgentArrived) != 0u;
+  const float since = a.at(kAgentSinceProgress, i);
+  // How far inside its region the agent is (0 outside; other goals have no edge to keep clear).
   const float depth = spec.kind == GoalKind::Region
                           ? std::max(0.0f, std::min({pos.x - spec.region_min.x, spec.region_max.x - pos.x,
                                                      pos.y - spec.region_min.y, spec.region_max.y - pos.y}))
                           : std::numeric_limits<float>::infinity();
-  // Just inside its region and blocked: another point of the region, every settle_after seconds while that lasts.
-  // Settling there (as below) walled the entrance off: in the bottleneck the first agents in stood along the
-  // region's near edge and everyone behind pressed against them for the rest of the run (41 % in after 240 s,
-  // the far side of the region empty).
-  if (spec.kind == GoalKind::Region && (job.state.at(kAgentFlags, i) & kAgentArrived) != 0u &&
-      depth < job.params.settle_depth && job.params.settle_after > 0.0f) {
-    const float since = a.at(kAgentSinceProgress, i);
+  // A region goal and no headway: another point of the region, every settle_after seconds while that lasts.
+  //  - Outside the region: the point it drew may be where an earlier agent settled (seen: the bottleneck's last
+  //    walker pressing for ever against one who had stopped just inside the region, a metre from free floor).
+  //    Since-progress is not reset, so an agent that still gets nowhere is reported stuck. Rejected: counting
+  //    "near an occupied point" as arrival, which would let an agent that never entered the region arrive.
+  //  - Inside it but within settle_depth of its edge: the new point lies at least settle_depth inside (where the
+  //    region is that large). Settling there (below) walled the entrance off: in the bottleneck the first agents
+  //    in stood along the region's near edge, everyone behind pressed against them for the rest of the run and the
+  //    region's far side stayed empty.
+  const bool redraw = spec.kind == GoalKind::Region && job.params.settle_after > 0.0f &&
+                      (!arrived || depth < job.params.settle_depth);
+  if (redraw) {
     if (since > job.params.settle_after &&
         std::floor(since / job.params.settle_after) != std::floor((since - job.dt) / job.params.settle_after)) {
-      // The new point lies at least settle_depth inside (where the region is that large), away from the edge.
-      const glm::vec2 inset = glm::min(glm::vec2(job.params.settle_depth), 0.5f * (spec.region_max - spec.region_min));
+      const glm::vec2 inset =
+          arrived ? glm::min(glm::vec2(job.params.settle_depth), 0.5f * (spec.region_max - spec.region_min))
+                  : glm::vec2(0.0f);
       std::uint32_t& rng = job.state.at(kAgentSeed, i);
       goal = random_in(spec.region_min + inset, spec.region_max - inset, rng);
       a.at(kAgentGoalX, i) = goal.x;
@@ -87,34 +93,15 @@ void steer_one(const SteerJob& job, std::size_t i) {
       c.at(kAgentCorners * 2, i) = 0.0f;
       job.state.at(kAgentFlags, i) |= kAgentNeedsPath;
     }
-  } else if (final_goal && (job.state.at(kAgentFlags, i) & kAgentArrived) != 0u &&
-      a.at(kAgentSinceProgress, i) > job.params.settle_after && glm::length(goal - pos) > 1e-3f) {
+  } else if (final_goal && arrived && since > job.params.settle_after && glm::length(goal - pos) > 1e-3f) {
+    // An agent that has reached its final goal (deep enough in its region) and makes no headway to its own point
+    // stops there: two agents pressing for points behind each other wait for ever under reciprocal avoidance.
     goal = pos;
     a.at(kAgentGoalX, i) = pos.x;
     a.at(kAgentGoalZ, i) = pos.y;
     c.at(0, i) = pos.x;
     c.at(1, i) = pos.y;
     c.at(kAgentCorners * 2, i) = 1.0f;
-  }
-  // An agent bound for a region that makes no headway outside it takes another point of the region, every
-  // settle_after seconds while that lasts: the point it drew may be where an earlier agent settled (seen: the
-  // bottleneck's last walker pressing for ever against one who had stopped just inside the region, a metre from
-  // free floor). Since-progress is not reset, so an agent that still gets nowhere is reported stuck. Rejected:
-  // counting "near an occupied point" as arrival, which would let an agent that never entered the region
-  // arrive.
-  if (spec.kind == GoalKind::Region && (job.state.at(kAgentFlags, i) & kAgentArrived) == 0u &&
-      job.params.settle_after > 0.0f) {
-    const float since = a.at(kAgentSinceProgress, i);
-    if (since > job.params.settle_after &&
-        std::floor(since / job.params.settle_after) != std::floor((since - job.dt) / job.params.settle_after)) {
-      std::uint32_t& rng = job.state.at(kAgentSeed, i);
-      goal = random_in(spec.region_min, spec.region_max, rng);
-      a.at(kAgentGoalX, i) = goal.x;
-      a.at(kAgentGoalZ, i) = goal.y;
-      a.at(kAgentBestDistance, i) = glm::length(goal - pos);
-      c.at(kAgentCorners * 2, i) = 0.0f;
-      job.state.at(kAgentFlags, i) |= kAgentNeedsPath;
-    }
   }
   // Arrival, and the next goal where the group has one.
   if (glm::length(goal - pos) < a.at(kAgentGoalRadius, i)) {
