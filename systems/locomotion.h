@@ -23,7 +23,8 @@
 // pelvis at heel strike, a slower agent takes shorter steps at no less than agent_min_cadence, and an agent that
 // stops brings its feet together and stands (kGaitIdle), both feet flat, with a slow weight shift.
 //
-//   reads:  rig (limbs, rest joint centres, reach, wrist paths), paths, style, dt, path (U32); agent (agent mode)
+//   reads:  rig (limbs, rest joint centres, reach, wrist paths), paths, style, dt, path (U32); agent and ik_flags
+//           (kIkLimbs, U32: the last IK run's flags; agent mode)
 //   writes: gait (kGaitFloats, read and written), time (clock component 0), placement (5), root_translation (3),
 //           local_rotation of root, sacroiliac, spine and midtarsals, ik_goal (kIkLimbs*kIkGoalFloats),
 //           ik_mode (kIkLimbs, I32)
