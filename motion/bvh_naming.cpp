@@ -1,7 +1,6 @@
 #include "motion/bvh_naming.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -15,27 +14,12 @@ namespace strata {
 
 namespace {
 
-// The BVH's joint names, normalised once (for the map file's hanging check).
-struct NameIndex {
-  const BvhMotion& motion;
-  std::vector<std::string> names;
-  explicit NameIndex(const BvhMotion& m) : motion(m) {
-    names.reserve(m.joint_count());
-    for (const BvhJoint& j : m.joints) names.push_back(normalised_joint_name(j.name));
-  }
-  std::int32_t find(const std::vector<std::string>& candidates) const {
-    for (const std::string& c : candidates)
-      for (std::size_t j = 0; j < names.size(); ++j)
-        if (names[j] == c) return static_cast<std::int32_t>(j);
-    return -1;
-  }
-  bool has(std::string_view n) const { return std::find(names.begin(), names.end(), n) != names.end(); }
-  bool is_ancestor(std::int32_t ancestor, std::int32_t j) const {
-    for (; j >= 0; j = motion.joints[static_cast<std::size_t>(j)].parent)
-      if (j == ancestor) return true;
-    return false;
-  }
-};
+// Whether BVH joint `ancestor` is `j` or one of its ancestors.
+bool is_ancestor(const BvhMotion& motion, std::int32_t ancestor, std::int32_t j) {
+  for (; j >= 0; j = motion.joints[static_cast<std::size_t>(j)].parent)
+    if (j == ancestor) return true;
+  return false;
+}
 
 // Nearest signed axis of a direction (0..2 for x, y, z; the sign in `sign`).
 int snapped_axis(const glm::vec3& d, float& sign) {
@@ -62,27 +46,9 @@ glm::mat3 bvh_file_axes(const glm::vec3& left, const glm::vec3& up) {
 
 namespace {
 
-// What a map needs of a capture's skeleton: BVH joint indices, -1 where the file has no such joint.
-struct Anatomy {
-  struct Side {
-    std::int32_t collar = -1, shoulder = -1, elbow = -1, wrist = -1, hand_aim = -1, hip = -1, knee = -1, ankle = -1,
-                 toe = -1;
-  };
-  std::int32_t root = -1, vl5 = -1, vt6 = -1, neck = -1, head = -1;
-  Side sides[2];  // left, right
-};
-
-Anatomy anatomy_of(const HumanoidShape& found) {
-  Anatomy a;
-  a.root = found.pelvis, a.vl5 = found.vl5, a.vt6 = found.vt6, a.neck = found.neck, a.head = found.head;
-  for (int s = 0; s < 2; ++s) {
-    const HumanoidShape::Side& d = found.sides[s];
-    Anatomy::Side& side = a.sides[s];
-    side.collar = d.collar, side.shoulder = d.shoulder, side.elbow = d.elbow, side.wrist = d.wrist;
-    side.hand_aim = d.hand_aim, side.hip = d.hip, side.knee = d.knee, side.ankle = d.ankle, side.toe = d.toe;
-  }
-  return a;
-}
+// What a map needs of a capture's skeleton: BVH joint indices, -1 where the file has no such joint; the pelvis is
+// the BVH joint that becomes HumanoidRoot. The same record the name and shape finders fill.
+using Anatomy = HumanoidShape;
 
 std::vector<std::vector<std::int32_t>> children_of(const BvhMotion& m) {
   std::vector<std::vector<std::int32_t>> out(m.joint_count());
@@ -118,7 +84,7 @@ BvhNaming finish(const BvhMotion& motion, Anatomy a, std::string family) {
   const std::vector<glm::vec3> rest = motion.rest_positions();
   const auto children = children_of(motion);
 
-  out.map.push_back({name_of(a.root), "HumanoidRoot", "", ""});
+  out.map.push_back({name_of(a.pelvis), "HumanoidRoot", "", ""});
   if (a.vl5 >= 0) out.map.push_back({name_of(a.vl5), "vl5", "", ""});
   if (a.vt6 >= 0) out.map.push_back({name_of(a.vt6), "vt6", "", ""});
   if (a.neck >= 0) out.map.push_back({name_of(a.neck), "vc4", "", ""});
@@ -146,8 +112,8 @@ BvhNaming finish(const BvhMotion& motion, Anatomy a, std::string family) {
 
   // Axes and units from the rest pose. Up is the root to the neck, or the feet to the root without a neck.
   const glm::vec3 left = rest[a.sides[0].hip] - rest[a.sides[1].hip];
-  const glm::vec3 up = a.neck >= 0 ? rest[a.neck] - rest[a.root]
-                                   : rest[a.root] - 0.5f * (rest[a.sides[0].ankle] + rest[a.sides[1].ankle]);
+  const glm::vec3 up = a.neck >= 0 ? rest[a.neck] - rest[a.pelvis]
+                                   : rest[a.pelvis] - 0.5f * (rest[a.sides[0].ankle] + rest[a.sides[1].ankle]);
   out.axes = bvh_file_axes(left, up);
   float lo = 1e30f, hi = -1e30f;
   for (std::size_t j = 0; j < motion.joint_count(); ++j) {
@@ -190,10 +156,7 @@ std::vector<std::string> anatomy_by_name(const BvhMotion& motion, Anatomy& a, st
     parents[j] = motion.joints[j].parent;
     names[j] = motion.joints[j].name;
   }
-  HumanoidShape found;
-  std::vector<std::string> unmatched = find_humanoid_by_names(parents, names, found, family);
-  if (unmatched.empty()) a = anatomy_of(found);
-  return unmatched;
+  return find_humanoid_by_names(parents, names, a, family);
 }
 
 // ---- by shape ----------------------------------------------------------------------------------------------------
@@ -207,11 +170,9 @@ std::string anatomy_by_shape(const BvhMotion& motion, Anatomy& a, std::string& f
     parents[j] = motion.joints[j].parent;
     if (motion.joints[j].has_end_site) tips[j] += motion.joints[j].end_site;
   }
-  HumanoidShape shape;
-  const std::string why = find_humanoid_by_shape(parents, rest, tips, shape);
+  const std::string why = find_humanoid_by_shape(parents, rest, tips, a);
   if (!why.empty()) return why;
-  a = anatomy_of(shape);
-  family = shape.facing_assumed ? "by shape (names not recognised; facing +Z assumed)" : "by shape (names not recognised)";
+  family = a.facing_assumed ? "by shape (names not recognised; facing +Z assumed)" : "by shape (names not recognised)";
   return {};
 }
 
@@ -250,7 +211,7 @@ BvhNaming bvh_naming_from_map(const BvhMotion& motion, const RetargetMapFile& fi
     const auto it = rows.find(hanim);
     return it == rows.end() ? -1 : it->second;
   };
-  a.root = at("HumanoidRoot"), a.vl5 = at("vl5"), a.vt6 = at("vt6"), a.neck = at("vc4"), a.head = at("skullbase");
+  a.pelvis = at("HumanoidRoot"), a.vl5 = at("vl5"), a.vt6 = at("vt6"), a.neck = at("vc4"), a.head = at("skullbase");
   for (int s = 0; s < 2; ++s) {
     const std::string h = s == 0 ? "l_" : "r_";
     Anatomy::Side& d = a.sides[s];
@@ -259,14 +220,13 @@ BvhNaming bvh_naming_from_map(const BvhMotion& motion, const RetargetMapFile& fi
     d.toe = at(h + "midtarsal");
   }
   // A child row must hang below its parent row in the capture, or its bone would aim backwards.
-  const NameIndex index(motion);
   for (int s = 0; s < 2; ++s) {
     const Anatomy::Side& d = a.sides[s];
-    const std::pair<std::int32_t, std::int32_t> links[] = {{a.root, d.hip}, {d.hip, d.knee}, {d.knee, d.ankle},
+    const std::pair<std::int32_t, std::int32_t> links[] = {{a.pelvis, d.hip}, {d.hip, d.knee}, {d.knee, d.ankle},
                                                           {d.ankle, d.toe}, {d.collar, d.shoulder},
                                                           {d.shoulder, d.elbow}, {d.elbow, d.wrist}};
     for (const auto& [upper, lower] : links)
-      if (upper >= 0 && lower >= 0 && !index.is_ancestor(upper, lower))
+      if (upper >= 0 && lower >= 0 && !is_ancestor(motion, upper, lower))
         throw LoadError(file.source + ": '" + motion.joints[lower].name + "' does not hang from '" +
                         motion.joints[upper].name + "' in " + motion.source);
   }

@@ -54,14 +54,17 @@ Skeleton foreign_rig() {
   return s;
 }
 
+// The file's name of the joint now called `hanim`, "(none)" when no joint is.
+std::string file_name_of(const Skeleton& s, const char* hanim) {
+  const std::int32_t j = s.find_joint(hanim);
+  return j < 0 ? std::string("(none)") : s.source_joint_names[static_cast<std::size_t>(j)];
+}
+
 TEST(HumanoidShape, NamesAForeignRigFromItsShape) {
   Skeleton s = foreign_rig();
   std::string why;
   ASSERT_TRUE(name_humanoid_joints(s, &why)) << why;
-  auto named = [&](const char* hanim) {
-    const std::int32_t j = s.find_joint(hanim);
-    return j < 0 ? std::string("(none)") : s.source_joint_names[static_cast<std::size_t>(j)];
-  };
+  auto named = [&](const char* hanim) { return file_name_of(s, hanim); };
   EXPECT_EQ(named("HumanoidRoot"), "P");
   EXPECT_EQ(named("vl5"), "S1");
   EXPECT_EQ(named("vt6"), "S2");
@@ -109,10 +112,7 @@ TEST(HumanoidShape, NamesAMixamoRigByItsNamesAndFallsBackToTheShape) {
   Skeleton s = mixamo_named(foreign_rig(), false);
   std::string why;
   ASSERT_TRUE(name_humanoid_joints(s, &why)) << why;
-  auto named = [&](const char* hanim) {
-    const std::int32_t j = s.find_joint(hanim);
-    return j < 0 ? std::string("(none)") : s.source_joint_names[static_cast<std::size_t>(j)];
-  };
+  auto named = [&](const char* hanim) { return file_name_of(s, hanim); };
   EXPECT_EQ(named("HumanoidRoot"), "mixamorig:Hips");
   EXPECT_EQ(named("vl5"), "mixamorig:Spine");
   EXPECT_EQ(named("vt6"), "mixamorig:Spine2");
@@ -129,8 +129,7 @@ TEST(HumanoidShape, NamesAMixamoRigByItsNamesAndFallsBackToTheShape) {
   // parent, so the limbs could not be built from the names; the shape rules name the rig instead.
   Skeleton helpers = mixamo_named(foreign_rig(), true);
   ASSERT_TRUE(name_humanoid_joints(helpers, &why)) << why;
-  EXPECT_EQ(helpers.source_joint_names[static_cast<std::size_t>(helpers.find_joint("l_shoulder"))],
-            "mixamorig:LeftArmRoll");
+  EXPECT_EQ(file_name_of(helpers, "l_shoulder"), "mixamorig:LeftArmRoll");
   EXPECT_NE(helpers.warnings.back().find("joints named by the skeleton's shape"), std::string::npos);
 
   // Names of no family, on a shape that is no humanoid: both reasons are given.
