@@ -215,6 +215,22 @@ std::string check_memory(std::uint64_t needed, std::string_view what) {
   return std::string(what) + " needs about " + gib(needed) + " of memory, " + gib(available) + " is available";
 }
 
+const char* quality_name(RenderQuality quality) { return quality == RenderQuality::High ? "high" : "low"; }
+
+void add_quality_option(CLI::App& cmd, RenderQuality& quality) {
+  const CLI::Validator low_or_high(
+      [](std::string& value) -> std::string {
+        if (value == "low" || value == "high") return {};
+        return "must be low or high, got '" + value + "'";
+      },
+      "low|high");
+  cmd.add_option_function<std::string>(
+         "--quality", [&quality](const std::string& value) { quality = value == "high" ? RenderQuality::High : RenderQuality::Low; },
+         "Rendering: high (sun with shadows, ambient occlusion, skin material, each walker in its own colours, "
+         "tone mapped) or low (one headlight, no shadows: what the render benchmarks time)")
+      ->check(low_or_high)->default_str(quality_name(quality));
+}
+
 std::unique_ptr<CrowdRenderer> make_checked_renderer(GlContext& context, int width, int height, std::string& error) {
   error = check_render_size(context.limits(), width, height);
   if (!error.empty()) return nullptr;

@@ -78,6 +78,9 @@ std::string render_target_error(int width, int height, const GlContext::Limits& 
 // The renderer for --width/--height, made before any work (crowd, soak --render, bench --render): the size is
 // checked against the context's limits, then the render target is built, so a size the driver refuses fails at
 // once with the flags named. Null, with `error` set, on failure.
+// --quality low|high on `cmd` (render/render_options.h RenderQuality), with `quality`'s value as the default.
+void add_quality_option(CLI::App& cmd, RenderQuality& quality);
+const char* quality_name(RenderQuality quality);
 std::unique_ptr<CrowdRenderer> make_checked_renderer(GlContext& context, int width, int height, std::string& error);
 
 // ---- Errors ----------------------------------------------------------------------------------------------------

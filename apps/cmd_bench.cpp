@@ -30,13 +30,16 @@ struct BenchOptions {
   std::string json;
   bool render = false;
   int width = 1280, height = 720;
+  RenderQuality quality = RenderQuality::Low;
 };
 
 // The crowd render pass (skinned bodies streamed every frame, one multi-draw per level) against the fastest way
 // to draw the same triangles: each level's mesh uploaded once and drawn with glDrawElementsInstanced, one copy per
 // walker at its position. Same target, material and camera; ground and skeletons off; each timed to glFinish.
 nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& context, CrowdRenderer& renderer) {
-  renderer.options().draw_ground = false;
+  // High quality keeps the ground: the shadows fall on it, and its shading is part of what the setting costs.
+  renderer.options().quality = o.quality;
+  renderer.options().draw_ground = o.quality == RenderQuality::High;
   renderer.options().draw_skeleton = false;
   const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
   OrbitCamera camera;
@@ -80,12 +83,27 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& cont
       if (f > 0) raw_s += std::chrono::duration<double>(t1 - t0).count(), raw_triangles += renderer.triangles_drawn();
     }
   }
+  // Then each pass on its own: a few more frames with the renderer's pass timer (which waits for the GL after each
+  // pass, so these frames are not part of the rates above).
+  Profiler passes(10, false);
+  renderer.set_profiler(&passes);
+  for (int f = 0; f < 10; ++f) {
+    step(scene, 1.0f / o.fps, unused);
+    passes.begin_frame();
+    render_frame(scene, renderer, camera, aspect, o.height, scratch);
+    passes.end_frame();
+  }
+  renderer.set_profiler(nullptr);
+  nlohmann::json pass_ms = nlohmann::json::object();
+  for (const SystemStats& s : passes.stats()) pass_ms[s.name] = s.mean_ms;
   const double crowd_rate = crowd_s > 0 ? double(crowd_triangles) / crowd_s : 0.0;
   const double raw_rate = raw_s > 0 ? double(raw_triangles) / raw_s : 0.0;
   nlohmann::json j;
   j["gl_renderer"] = context.renderer();
   j["width"] = o.width;
   j["height"] = o.height;
+  j["quality"] = quality_name(o.quality);
+  j["pass_ms"] = pass_ms;
   j["crowd_triangles_per_second"] = crowd_rate;
   j["raw_instanced_triangles_per_second"] = raw_rate;
   j["ratio"] = raw_rate > 0 ? crowd_rate / raw_rate : 0.0;
@@ -208,6 +226,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--json", o->json, "Write the results here");
   cmd->add_flag("--render", o->render,
                 "Also time the crowd render pass (headless EGL) against raw instanced drawing of the same triangles");
+  add_quality_option(*cmd, o->quality);
   cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->callback([o, &exit_code] { exit_code = run_bench(*o); });

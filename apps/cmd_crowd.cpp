@@ -43,6 +43,7 @@ struct CrowdOptions {
   SceneOptions scene;
   std::size_t frames = 60;
   std::string out = "out/crowd";
+  RenderQuality quality = RenderQuality::High;
   int width = 1280;
   int height = 720;
   float fps = 30.0f;
@@ -105,6 +106,7 @@ int run_crowd(const CrowdOptions& o) {
     return kExitFailure;
   }
   CrowdRenderer& renderer = *renderer_owner;
+  renderer.options().quality = o.quality;
   const OutputClaim claim = claim_crowd_output_dir(out);
   if (!claim.refused.empty()) {
     print_error("crowd", claim.refused);
@@ -130,6 +132,8 @@ int run_crowd(const CrowdOptions& o) {
     RenderFrameOptions draw;
     draw.skeleton_overlay = o.skeleton_overlay;
     Profiler profiler(120, true);
+    // The render passes under the "render" scope, each finished before its scope closes (render/crowd_renderer.h).
+    renderer.set_profiler(&profiler);
     OrbitCamera camera;
     camera.yaw = o.camera_yaw;
     camera.pitch = o.camera_pitch;
@@ -257,6 +261,7 @@ int run_crowd(const CrowdOptions& o) {
     summary["clip"] = clip >= 0 ? nlohmann::json(scene.rig().clips[clip].name)
                       : clip == kAllClips ? nlohmann::json("all") : nlohmann::json(nullptr);
     summary["gl_renderer"] = context->renderer();
+    summary["quality"] = quality_name(o.quality);
     summary["gl_version"] = context->version();
     summary["wall_s"] = wall;
     summary["fps"] = wall > 0 ? static_cast<double>(frames_done) / wall : 0.0;
@@ -322,6 +327,7 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--frames,-f", o->frames, "Frames to simulate and render")->capture_default_str()
       ->check(whole_in(1, 100'000'000, true));
   cmd->add_option("--out,-o", o->out, "Output directory")->capture_default_str();
+  add_quality_option(*cmd, o->quality);
   cmd->add_option("--width", o->width, "Image width")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--height", o->height, "Image height")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--skip", o->skip_seconds,

@@ -38,6 +38,7 @@ namespace {
 
 struct ViewOptions {
   SceneOptions scene;
+  RenderQuality quality = RenderQuality::High;
   int width = 1280;
   int height = 720;
   std::size_t frames = 0;  // 0 = until the window closes
@@ -102,6 +103,7 @@ int run_view_headless(const ViewOptions& o) {
     apply_start_options(o, session);
     std::unique_ptr<GlContext> context = create_headless_gl_context();
     CrowdRenderer renderer(o.width, o.height);
+    renderer.options().quality = o.quality;
     std::optional<ImGuiLayer> ui;
     if (!o.no_panel) ui.emplace();
     Profiler profiler(120, false);
@@ -166,6 +168,7 @@ int run_view(const ViewOptions& o) {
     GlfwWindow window(wo);
     glm::ivec2 fb = window.framebuffer_size();
     CrowdRenderer renderer(fb.x, fb.y);
+    renderer.options().quality = o.quality;
     // The panel attaches to the window's callbacks; --no-panel leaves the scene alone on screen.
     std::optional<ImGuiLayer> ui;
     if (!o.no_panel) ui.emplace(window.native_handle());
@@ -294,6 +297,7 @@ void add_view_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ViewOptions>();
   auto* cmd = app.add_subcommand("view", "Open the crowd in a window with an orbit camera (needs a display)");
   add_scene_options(*cmd, o->scene);
+  add_quality_option(*cmd, o->quality);
   cmd->add_option("--width", o->width, "Window width")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--height", o->height, "Window height")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--frames", o->frames, "Quit after F frames (0 = run until closed)")->capture_default_str()

@@ -51,32 +51,41 @@ class SubdivSurfaceCache {
   mutable std::array<std::shared_ptr<const SubdivSurface>, 3> surfaces_{};
 };
 
-struct CorCentres;  // rig/cor_centres.h
-// Centres of rotation per level (index 0..2) and for the cage (index 3), computed on first use by
-// body_cor_centres() (rig/cor_centres.h): only a crowd skinned with SkinningMode::CentresOfRotation pays for
-// them. A copy starts empty, like SubdivSurfaceCache, so an edited binding never serves stale centres.
-class CorCentreCache {
+// Data derived from one level's rest mesh and binding (index 0..2 the levels, 3 the cage), computed on first use
+// by the function that owns it and then shared by every scene and walker of the rig; a copy starts empty, like
+// SubdivSurfaceCache, so an edited binding or mesh never serves stale results.
+template <class T>
+class PerLevelCache {
  public:
-  CorCentreCache() = default;
-  CorCentreCache(const CorCentreCache&) {}
-  CorCentreCache& operator=(const CorCentreCache&) {
+  PerLevelCache() = default;
+  PerLevelCache(const PerLevelCache&) {}
+  PerLevelCache& operator=(const PerLevelCache&) {
     std::lock_guard lock(mutex_);
-    centres_ = {};
+    items_ = {};
     return *this;
   }
   template <class Build>
-  std::shared_ptr<const CorCentres> get(std::size_t slot, Build&& build) const {
-    if (slot >= centres_.size()) throw std::invalid_argument("centres of rotation: no such level");
+  std::shared_ptr<const T> get(std::size_t slot, Build&& build) const {
+    if (slot >= items_.size()) throw std::invalid_argument("body cache: no such level");
     std::lock_guard lock(mutex_);
-    std::shared_ptr<const CorCentres>& c = centres_[slot];
+    std::shared_ptr<const T>& c = items_[slot];
     if (!c) c = build();
     return c;
   }
 
  private:
   mutable std::mutex mutex_;
-  mutable std::array<std::shared_ptr<const CorCentres>, 4> centres_{};
+  mutable std::array<std::shared_ptr<const T>, 4> items_{};
 };
+
+// Centres of rotation (rig/cor_centres.h body_cor_centres): only a crowd skinned with
+// SkinningMode::CentresOfRotation pays for them.
+struct CorCentres;
+using CorCentreCache = PerLevelCache<CorCentres>;
+// Ambient occlusion per vertex (rig/vertex_occlusion.h body_vertex_occlusion): only the shaded renderer
+// (RenderQuality::High) pays for it.
+struct VertexOcclusion;
+using VertexOcclusionCache = PerLevelCache<VertexOcclusion>;
 
 struct Body {
   std::vector<BodyLevel> levels;
@@ -85,6 +94,7 @@ struct Body {
   std::optional<BodyLevel> cage = std::nullopt;
   SubdivSurfaceCache subdiv{};
   CorCentreCache cor{};
+  VertexOcclusionCache occlusion{};
 };
 
 }  // namespace strata

@@ -50,6 +50,15 @@ struct BodyDrawInput {
   // Optional per-vertex colours, indexed like the positions (walker_count * stride entries), each bytes R, G, B,
   // A in memory; A blends the colour over the skin colour (0 = plain skin). The binding editor shows weights so.
   const std::uint32_t* rgba = nullptr;
+  // RenderQuality::High only, each optional. A key per walker (walker_count entries) choosing its colours
+  // (render/appearance.h); without keys every walker gets the plain skin colour. The surface classes of each
+  // vertex and its distance to their cut (rig/surface_material.h SurfaceClasses; vertex_count entries each,
+  // shared by every walker); without them all is skin. Ambient occlusion per vertex in [0, 1] (vertex_count
+  // entries, shared); without it none.
+  const std::uint32_t* walker_keys = nullptr;
+  std::span<const std::uint8_t> materials;
+  std::span<const float> material_cut;
+  std::span<const float> ambient_occlusion;
 };
 
 // Impostors (components/impostor_atlas.h): far walkers drawn as one camera-facing quad each from `atlas`, which the

@@ -2,17 +2,63 @@
 
 #include <epoxy/gl.h>
 
+#include <cmath>
 #include <optional>
 #include <vector>
 
+#include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
+
+#include "profiling/profiler.h"
 #include "render/body_pass.h"
 #include "render/ground_pass.h"
 #include "render/props_pass.h"
 #include "render/reference_pass.h"
 #include "render/render_target.h"
+#include "render/shadow_pass.h"
 #include "render/skeleton_pass.h"
 
 namespace strata {
+
+namespace {
+
+// The sun and sky of RenderQuality::High. Linear values, balanced so that a surface facing the sun is about three
+// times as bright as one lit by the sky alone: a clear afternoon, with shadows that read without going black.
+Sunlight sunlight(const RenderOptions& o) {
+  Sunlight s;
+  const float length = glm::length(o.to_sun);
+  s.to_sun = length > 1e-6f && std::isfinite(length) ? o.to_sun / length : glm::vec3(0.0f, 1.0f, 0.0f);
+  s.sun_color = glm::vec3(2.3f, 2.18f, 1.98f);
+  s.sky_color = glm::vec3(0.42f, 0.50f, 0.66f);
+  s.bounce_color = glm::vec3(0.20f, 0.18f, 0.15f);
+  s.exposure = 0.8f;
+  return s;
+}
+
+// Times the passes of a frame under one profiler scope each (set_profiler): each pass's GL commands are finished
+// before its scope ends, so the scope holds the pass's own cost rather than whichever later call waited for it.
+// Without a profiler it does nothing and the frame runs without those waits.
+class PassTimer {
+ public:
+  explicit PassTimer(Profiler* profiler) : profiler_(profiler) {}
+  ~PassTimer() { stop(); }
+  void start(const char* name) {
+    if (!profiler_) return;
+    stop();
+    scope_.emplace(*profiler_, profiler_->intern(name));
+  }
+  void stop() {
+    if (!scope_) return;
+    glFinish();
+    scope_.reset();
+  }
+
+ private:
+  Profiler* profiler_;
+  std::optional<Profiler::ScopedTimer> scope_;
+};
+
+}  // namespace
 
 struct CrowdRenderer::Impl {
   Impl(int width, int height, const RenderOptions& o) : options(o), target(width, height) {}
@@ -24,6 +70,8 @@ struct CrowdRenderer::Impl {
   GroundPass ground;
   PropsPass props;
   std::optional<ReferencePass> reference;  // built on the benchmark's first call
+  std::optional<ShadowPass> shadow;        // built on the first RenderQuality::High frame
+  Profiler* profiler = nullptr;
   std::size_t triangles_drawn = 0;
   std::vector<glm::vec3> ground_points;  // scratch
 };
@@ -36,6 +84,7 @@ CrowdRenderer::~CrowdRenderer() = default;
 int CrowdRenderer::width() const { return impl_->target.width(); }
 int CrowdRenderer::height() const { return impl_->target.height(); }
 RenderOptions& CrowdRenderer::options() { return impl_->options; }
+void CrowdRenderer::set_profiler(Profiler* profiler) { impl_->profiler = profiler; }
 void CrowdRenderer::resize(int width, int height) { impl_->target.resize(width, height); }
 std::size_t CrowdRenderer::triangles_drawn() const { return impl_->triangles_drawn; }
 std::size_t CrowdRenderer::impostors_drawn() const { return impl_->body.impostors_drawn(); }
@@ -65,6 +114,29 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
   r.body.check(bodies);
   check_skeleton_input(input);
   const RenderOptions& o = r.options;
+  PassTimer timer(r.profiler);
+  // RenderQuality::High: the sun's shadow map first, from the bodies' vertices as this frame streams them (the
+  // colour pass below draws from the same buffers) and the props; its frustum fits the joints, grown by how far
+  // a body reaches past them.
+  Sunlight sun;
+  ShadedFrame shaded;
+  const bool high = o.quality == RenderQuality::High;
+  if (high) {
+    timer.start("shadow_map");
+    if (!r.shadow) r.shadow.emplace();
+    sun = sunlight(o);
+    shaded.shadow = &*r.shadow;
+    shaded.sun = &sun;
+    shaded.eye = glm::vec3(glm::inverse(view)[3]);
+    const std::span<const glm::vec3> joints = drawn_joint_positions(input);
+    shaded.shadows = r.shadow->begin(sun.to_sun, joints, 0.35f);
+    if (shaded.shadows) {
+      r.body.draw_shadow(bodies, *r.shadow);
+      r.props.draw_shadow(*r.shadow);
+      r.shadow->end();
+    }
+  }
+  timer.start("ground");
   r.target.begin_frame(o.clear_color);
   if (o.draw_ground) {
     std::span<const glm::vec3> points = drawn_joint_positions(input);
@@ -74,14 +146,18 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
       r.ground_points.insert(r.ground_points.end(), input.ground_points.begin(), input.ground_points.end());
       points = r.ground_points;
     }
-    r.ground.draw(points, view, projection, o.ground_color, o.clear_color);
+    r.ground.draw(points, view, projection, o.ground_color, o.clear_color, high ? &shaded : nullptr);
   }
-  r.props.draw(view, projection);
+  r.props.draw(view, projection, high ? &shaded : nullptr);
+  timer.start("skeletons");
   if (o.draw_skeleton) r.skeleton.draw(input, view, projection, o);
-  r.body.draw(bodies, view, projection, o.skin_color);
+  timer.start("bodies");
+  r.body.draw(bodies, view, projection, o.skin_color, high ? &shaded : nullptr);
   r.triangles_drawn = r.body.triangles_drawn();
   glBindVertexArray(0);  // no VAO of ours stays bound for GL the caller draws next (the viewer's panel)
+  timer.start("resolve");
   r.target.resolve();
+  timer.stop();
 }
 
 void CrowdRenderer::render_instanced_reference(const BodyDrawInput& mesh, std::span<const glm::vec3> offsets,

@@ -8,6 +8,7 @@
 //   render/body_pass.h       the skinned bodies, read from a BodySource (render/body_source.h), and impostors
 //                            (render/impostor_pass.h)
 //   render/reference_pass.h  the render benchmark's raw-instancing reference
+//   render/shadow_pass.h     the sun's shadow map and the lighting of RenderQuality::High
 // Their shaders are the files under render/shaders/, embedded in the library. A frame draws ground, skeletons,
 // then bodies, and resolves. The caller owns the GL context, which must be current for every call including the
 // destructor.
@@ -27,6 +28,8 @@
 
 namespace strata {
 
+class Profiler;
+
 class CrowdRenderer {
  public:
   // Needs a current GL 4.5 core context. Throws std::runtime_error on shader/FBO failure, std::invalid_argument
@@ -40,6 +43,10 @@ class CrowdRenderer {
   int height() const;
   void resize(int width, int height);
   RenderOptions& options();
+  // Times each pass of render() (shadow_map, ground, skeletons, bodies, resolve) under its own scope of
+  // `profiler`, nested in whatever scope the caller has open, finishing each pass's GL work before its scope
+  // closes. Null (the default) turns the timing off and with it those waits.
+  void set_profiler(Profiler* profiler);
 
   // Draws one frame into the target: ground (when options().draw_ground), skeletons (when
   // options().draw_skeleton) and the bodies of `bodies`. Waits for nothing; read_rgba() or

@@ -18,7 +18,9 @@ GlObject::GlObject(GlKind kind) : kind_(kind) {
     case GlKind::kFramebuffer: glCreateFramebuffers(1, &name_); break;
     case GlKind::kRenderbuffer: glCreateRenderbuffers(1, &name_); break;
     case GlKind::kProgram: name_ = glCreateProgram(); break;
+    case GlKind::kTexture2D: glCreateTextures(GL_TEXTURE_2D, 1, &name_); break;
     case GlKind::kTexture2DArray: glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &name_); break;
+    case GlKind::kTextureBuffer: glCreateTextures(GL_TEXTURE_BUFFER, 1, &name_); break;
   }
 }
 
@@ -39,7 +41,9 @@ void GlObject::reset() {
     case GlKind::kFramebuffer: glDeleteFramebuffers(1, &name_); break;
     case GlKind::kRenderbuffer: glDeleteRenderbuffers(1, &name_); break;
     case GlKind::kProgram: glDeleteProgram(name_); break;
-    case GlKind::kTexture2DArray: glDeleteTextures(1, &name_); break;
+    case GlKind::kTexture2D:
+    case GlKind::kTexture2DArray:
+    case GlKind::kTextureBuffer: glDeleteTextures(1, &name_); break;
   }
   name_ = 0;
 }

@@ -30,9 +30,12 @@ GroundPass::GroundPass()
       vao_(GlKind::kVertexArray) {}
 
 void GroundPass::draw(std::span<const glm::vec3> joints, const glm::mat4& view, const glm::mat4& projection,
-                      const glm::vec3& ground_color, const glm::vec4& clear_color) {
+                      const glm::vec3& ground_color, const glm::vec4& clear_color, const ShadedFrame* shading) {
   const GroundExtent e = ground_extent(joints);
-  const GLuint p = program_.id();
+  if (shading && !shaded_program_)
+    shaded_program_ = link_shaded_program("render/shaders/ground.vert", "render/shaders/ground_shaded.frag");
+  const GLuint p = shading ? shaded_program_.id() : program_.id();
+  if (shading) shading->apply(p);
   glUseProgram(p);
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));

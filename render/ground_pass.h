@@ -9,6 +9,7 @@
 #include <glm/vec4.hpp>
 
 #include "render/gl_program.h"
+#include "render/shadow_pass.h"
 
 namespace strata {
 
@@ -26,12 +27,14 @@ class GroundPass {
   // failure.
   GroundPass();
 
-  // Draws the ground under `joints` (every walker's world-space joints) into the bound framebuffer.
+  // Draws the ground under `joints` (every walker's world-space joints) into the bound framebuffer. `shading`:
+  // lit by the sun with the walkers' shadows (RenderQuality::High); null: the low-quality look.
   void draw(std::span<const glm::vec3> joints, const glm::mat4& view, const glm::mat4& projection,
-            const glm::vec3& ground_color, const glm::vec4& clear_color);
+            const glm::vec3& ground_color, const glm::vec4& clear_color, const ShadedFrame* shading = nullptr);
 
  private:
   GlObject program_;
+  GlObject shaded_program_;  // made on the first shaded frame
   GlObject vao_;  // empty: the quad comes from gl_VertexID, but the core profile draws only with a VAO bound
 };
 

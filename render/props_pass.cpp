@@ -178,8 +178,32 @@ void PropsPass::clear() {
   key_ = 0;
 }
 
-void PropsPass::draw(const glm::mat4& view, const glm::mat4& projection) {
+void PropsPass::draw_shadow(const ShadowPass& shadow) {
   if (count_ == 0) return;
+  if (!depth_program_) depth_program_ = link_program("render/shaders/props_shaded.vert", "render/shaders/shadow.frag");
+  const GLuint p = depth_program_.id();
+  glUseProgram(p);
+  glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view_projection"), 1, GL_FALSE,
+                            glm::value_ptr(shadow.light_view_projection()));
+  glBindVertexArray(vao_.id());
+  glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(count_));
+}
+
+void PropsPass::draw(const glm::mat4& view, const glm::mat4& projection, const ShadedFrame* shading) {
+  if (count_ == 0) return;
+  if (shading) {
+    if (!shaded_program_)
+      shaded_program_ = link_shaded_program("render/shaders/props_shaded.vert", "render/shaders/shaded.frag");
+    const GLuint p = shaded_program_.id();
+    shading->apply(p);
+    glUseProgram(p);
+    const glm::mat4 view_projection = projection * view;
+    glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view_projection"), 1, GL_FALSE,
+                              glm::value_ptr(view_projection));
+    glBindVertexArray(vao_.id());
+    glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(count_));
+    return;
+  }
   const GLuint p = program_.id();
   glUseProgram(p);
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));

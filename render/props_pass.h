@@ -14,6 +14,7 @@
 
 #include "components/scenario.h"
 #include "render/gl_program.h"
+#include "render/shadow_pass.h"
 
 namespace strata {
 
@@ -41,10 +42,14 @@ class PropsPass {
   void clear();
   bool empty() const { return count_ == 0; }
   std::uint64_t key() const { return key_; }
-  void draw(const glm::mat4& view, const glm::mat4& projection);
+  // `shading`: lit by the sun (RenderQuality::High); null: the low-quality look.
+  void draw(const glm::mat4& view, const glm::mat4& projection, const ShadedFrame* shading = nullptr);
+  // Draws the props' depth into the bound shadow map (ShadowPass::begin).
+  void draw_shadow(const ShadowPass& shadow);
 
  private:
   GlObject program_, vao_, buffer_;
+  GlObject shaded_program_, depth_program_;  // made on the first shaded frame
   std::size_t count_ = 0;
   std::uint64_t key_ = 0;
 };

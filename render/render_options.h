@@ -6,7 +6,18 @@
 
 namespace strata {
 
+// How much of the lighting a frame pays for. Low: one headlight, Lambert and a rim, colours written as they are
+// (the renderer of the paper's reproduction, and what the crowd benchmarks time). High: the sun with a shadow map
+// (walkers' shadows on the ground and on each other), a sky-and-ground ambient darkened by per-vertex ambient
+// occlusion, a skin material (wrap lighting, subsurface tint, sheen), every walker dressed in its own colours
+// (render/appearance.h), ACES tone mapping and sRGB output.
+enum class RenderQuality { Low, High };
+
 struct RenderOptions {
+  RenderQuality quality = RenderQuality::Low;
+  // The sun of RenderQuality::High: towards it (world, normalised when used), an afternoon sun from behind the
+  // default camera's left so that shadows fall towards the viewer's right, long enough to read at 45 degrees.
+  glm::vec3 to_sun{-0.45f, 0.78f, 0.42f};
   bool draw_ground = true;
   bool draw_skeleton = true;           // bones and joints (drawn inside bodies when both are on)
   float bone_radius = 0.025f;          // metres at the parent end of a bone

@@ -9,6 +9,8 @@
 
 #include "render/impostor_bake.h"
 #include "rig/subdiv_topology.h"
+#include "rig/surface_material.h"
+#include "rig/vertex_occlusion.h"
 #include "systems/pose_gather.h"
 
 namespace strata {
@@ -36,6 +38,62 @@ std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd) {
     input.vertex_count = s.vertex_count;
     input.walker_count = s.walkers;
     inputs.push_back(input);
+  }
+  return inputs;
+}
+
+std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd, RenderScratch& scratch) {
+  std::vector<BodyDrawInput> inputs = body_draw_inputs(crowd);
+  const Body* body = crowd.rig().body.get();
+  std::size_t k = 0;
+  for (std::size_t slot = 0; slot < kDetailSlots && k < inputs.size(); ++slot) {
+    const SkinnedCrowd& s = crowd.skinned[slot];
+    if (s.walkers == 0 || s.vertex_count == 0 || triangles_of(crowd, slot) == nullptr) continue;
+    BodyDrawInput& input = inputs[k++];
+    // Keys: the entity slot of each block's walker, which stays with the walker across tables.
+    const SoaTable& table = crowd.table(static_cast<DetailSlot>(slot));
+    std::vector<std::uint32_t>& keys = scratch.walker_keys[slot];
+    keys.resize(s.walkers);
+    for (std::size_t w = 0; w < s.walkers; ++w) {
+      const std::size_t row = s.walker_ids.empty() ? w : s.walker_ids[w];
+      keys[w] = row < table.size() ? table.owner(static_cast<std::uint32_t>(row)).index : static_cast<std::uint32_t>(w);
+    }
+    input.walker_keys = keys.data();
+    if (!body) continue;
+    const bool refined = slot == slot_index(DetailSlot::Refined);
+    // What the classes depend on: the refined surface (immutable, shared), or the layout's vertex order, which a
+    // binding edit can regroup in place; hashing it costs microseconds a frame.
+    std::uint64_t source = reinterpret_cast<std::uintptr_t>(crowd.skin.subdiv.get());
+    if (!refined) {
+      FnvHasher h;
+      const std::vector<std::uint32_t>& original = crowd.skin.layouts[slot].original;
+      h.bytes(original.data(), original.size() * sizeof(std::uint32_t));
+      h.value(reinterpret_cast<std::uintptr_t>(body));
+      source = h.h;
+    }
+    if (scratch.materials_of[slot] != source) {
+      SurfaceClasses& materials = scratch.materials[slot];
+      std::vector<float>& occlusion = scratch.occlusion[slot];
+      materials = {}, occlusion.clear();
+      if (refined && crowd.skin.subdiv && body->cage) {
+        materials = refined_materials(body->cage->mesh, *crowd.skin.subdiv);
+        occlusion = refined_occlusion(body_vertex_occlusion(*body, -1)->open, *crowd.skin.subdiv);
+      } else if (!refined && slot < body->levels.size()) {
+        const SkinLayout& layout = crowd.skin.layouts[slot];
+        materials = layout_materials(body->levels[slot].mesh, layout);
+        // The first high-quality frame of a level bakes its occlusion (once per body; Body::occlusion).
+        const std::vector<float>& open = body_vertex_occlusion(*body, static_cast<int>(slot))->open;
+        occlusion.assign(layout.vertex_count, 1.0f);
+        for (std::size_t v = 0; v < layout.vertex_count && v < layout.original.size(); ++v)
+          if (layout.original[v] < open.size()) occlusion[v] = open[layout.original[v]];
+      }
+      scratch.materials_of[slot] = source;
+    }
+    if (scratch.materials[slot].size() >= s.vertex_count) {
+      input.materials = scratch.materials[slot].classes;
+      input.material_cut = scratch.materials[slot].cut;
+    }
+    if (scratch.occlusion[slot].size() >= s.vertex_count) input.ambient_occlusion = scratch.occlusion[slot];
   }
   return inputs;
 }
@@ -133,7 +191,9 @@ bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderSc
 std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
                          int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options) {
   const std::size_t with_joints = gather_crowd_joints(crowd, scratch.joints);
-  std::vector<BodyDrawInput> bodies = body_draw_inputs(crowd);
+  std::vector<BodyDrawInput> bodies = renderer.options().quality == RenderQuality::High
+                                          ? body_draw_inputs(crowd, scratch)
+                                          : body_draw_inputs(crowd);
   if (options.recolour) options.recolour(bodies);
   renderer.options().draw_skeleton = crowd.skin.level.is_none() || options.skeleton_overlay;
   // A scenario's obstacles and goals, built once per scenario (keyed by its name, source and seed).

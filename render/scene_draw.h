@@ -7,6 +7,8 @@
 // Every command that draws calls exactly these two per frame (crowd, view, soak --render, bench --render and the
 // muscle report's figure); bench and soak without rendering hand a camera over with set_crowd_camera(), so
 // culling and levels of detail run in every command's frame.
+#include <array>
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -14,6 +16,7 @@
 
 #include "render/camera.h"
 #include "render/crowd_renderer.h"
+#include "rig/surface_material.h"
 #include "scene/crowd.h"
 
 namespace strata {
@@ -21,6 +24,9 @@ namespace strata {
 // What the body pass draws from the crowd's last step(): one input per table skinned (several under
 // DetailLevel::automatic), in slot order; empty when the crowd has no body to draw.
 std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd);
+struct RenderScratch;
+// The same with what RenderQuality::High colours bodies by: walker keys and surface classes, kept in `scratch`.
+std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd, RenderScratch& scratch);
 // The crowd's impostors as the body pass draws them (no walkers until the crowd has an atlas:
 // render/impostor_bake.h ensure_impostor_atlas, which render_frame calls).
 // `standing_phase`: where a scenario's agents stand (kGaitIdle), their impostors show the walk's phase with the feet
@@ -46,6 +52,12 @@ bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderSc
 
 // Per-frame scratch a command keeps between frames, so render_frame allocates nothing in steady state.
 struct RenderScratch {
+  // RenderQuality::High's inputs per body slot: each walker's appearance key (its entity slot), and the surface
+  // class and ambient occlusion of each vertex, recomputed only when the slot's mesh or vertex order changes.
+  std::array<std::vector<std::uint32_t>, kDetailSlots> walker_keys;
+  std::array<SurfaceClasses, kDetailSlots> materials;
+  std::array<std::vector<float>, kDetailSlots> occlusion;  // ambient occlusion per vertex (rig/vertex_occlusion.h)
+  std::array<std::uint64_t, kDetailSlots> materials_of{};  // a key of what `materials` was computed for
   std::vector<glm::vec3> joints;
   std::vector<glm::vec3> impostor_feet;
   std::vector<float> impostor_phase;

@@ -344,8 +344,12 @@ struct TwoBoxBodies {
       }
   }
   BodyDrawInput input() const {
-    return BodyDrawInput{triangles, soa[0].data(), soa[1].data(), soa[2].data(), soa[3].data(), soa[4].data(),
-                         soa[5].data(), per_walker, per_walker, 2};
+    BodyDrawInput in;
+    in.triangles = triangles;
+    in.px = soa[0].data(), in.py = soa[1].data(), in.pz = soa[2].data();
+    in.nx = soa[3].data(), in.ny = soa[4].data(), in.nz = soa[5].data();
+    in.stride = per_walker, in.vertex_count = per_walker, in.walker_count = 2;
+    return in;
   }
 };
 

@@ -1,0 +1,69 @@
+#include "render/appearance.h"
+
+#include <cmath>
+#include <cstddef>
+
+namespace strata {
+namespace {
+
+struct Srgb {
+  float r, g, b;
+};
+
+// Skin tones from light to dark, after measured skin reflectance (sRGB); every tone appears in a crowd.
+constexpr Srgb kSkin[] = {{0.96f, 0.80f, 0.69f}, {0.93f, 0.75f, 0.63f}, {0.87f, 0.66f, 0.53f}, {0.78f, 0.57f, 0.44f},
+                          {0.66f, 0.47f, 0.34f}, {0.54f, 0.37f, 0.26f}, {0.42f, 0.28f, 0.19f}, {0.31f, 0.20f, 0.14f}};
+constexpr Srgb kHair[] = {{0.08f, 0.06f, 0.05f}, {0.17f, 0.11f, 0.07f}, {0.30f, 0.19f, 0.11f}, {0.47f, 0.33f, 0.20f},
+                          {0.72f, 0.58f, 0.38f}, {0.45f, 0.22f, 0.12f}, {0.62f, 0.60f, 0.57f}};
+// Shirts: muted everyday colours, a few brighter ones.
+constexpr Srgb kTop[] = {{0.85f, 0.85f, 0.83f}, {0.18f, 0.22f, 0.33f}, {0.55f, 0.15f, 0.15f}, {0.25f, 0.40f, 0.30f},
+                         {0.80f, 0.65f, 0.30f}, {0.35f, 0.50f, 0.70f}, {0.20f, 0.20f, 0.22f}, {0.60f, 0.45f, 0.60f},
+                         {0.90f, 0.50f, 0.25f}, {0.45f, 0.45f, 0.47f}};
+// Trousers: denim, greys, khaki, black.
+constexpr Srgb kBottom[] = {{0.20f, 0.27f, 0.42f}, {0.32f, 0.40f, 0.55f}, {0.15f, 0.15f, 0.17f}, {0.40f, 0.40f, 0.42f},
+                            {0.62f, 0.55f, 0.40f}, {0.30f, 0.24f, 0.18f}};
+constexpr Srgb kShoes[] = {{0.10f, 0.09f, 0.09f}, {0.85f, 0.85f, 0.83f}, {0.35f, 0.22f, 0.13f}, {0.25f, 0.25f, 0.28f}};
+constexpr Srgb kIris[] = {{0.20f, 0.13f, 0.09f}, {0.30f, 0.20f, 0.12f}, {0.25f, 0.35f, 0.45f}, {0.30f, 0.35f, 0.22f}};
+constexpr Srgb kSclera = {0.86f, 0.83f, 0.80f};
+
+float to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+glm::vec4 linear(const Srgb& c, float skin) { return {to_linear(c.r), to_linear(c.g), to_linear(c.b), skin}; }
+
+// splitmix64's finaliser: consecutive keys (entity slots 0, 1, 2...) land on unrelated palettes.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+template <std::size_t N>
+const Srgb& pick(const Srgb (&table)[N], std::uint64_t bits) {
+  return table[bits % N];
+}
+
+}  // namespace
+
+WalkerPalette walker_palette(std::uint32_t key) {
+  const std::uint64_t h = mix(key), g = mix(h);
+  WalkerPalette p;
+  p[static_cast<std::size_t>(SurfaceMaterial::Skin)] = linear(pick(kSkin, h), 1.0f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Top)] = linear(pick(kTop, h >> 16), 0.0f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Bottom)] = linear(pick(kBottom, h >> 32), 0.0f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Shoes)] = linear(pick(kShoes, h >> 48), 0.0f);
+  // Hair is drawn apart from skin (g, not h): dark skin with light hair is rarer than the reverse but happens.
+  p[static_cast<std::size_t>(SurfaceMaterial::Hair)] = linear(pick(kHair, g), 0.15f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Eyes)] = linear(pick(kIris, g >> 20), 0.3f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Sclera)] = linear(kSclera, 0.3f);
+  return p;
+}
+
+WalkerPalette plain_palette(const glm::vec3& skin_srgb) {
+  WalkerPalette p;
+  p.fill(linear({skin_srgb.r, skin_srgb.g, skin_srgb.b}, 1.0f));
+  p[static_cast<std::size_t>(SurfaceMaterial::Eyes)] = linear(kIris[0], 0.3f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Sclera)] = linear(kSclera, 0.3f);
+  return p;
+}
+
+}  // namespace strata
