@@ -3,9 +3,12 @@
 #include <epoxy/gl.h>
 
 #include <cmath>
+#include <limits>
 #include <optional>
+#include <variant>
 #include <vector>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
@@ -74,6 +77,7 @@ struct CrowdRenderer::Impl {
   Profiler* profiler = nullptr;
   std::size_t triangles_drawn = 0;
   std::vector<glm::vec3> ground_points;  // scratch
+  std::vector<glm::vec3> casters;        // scratch
 };
 
 CrowdRenderer::CrowdRenderer(int width, int height, RenderOptions options)
@@ -128,8 +132,22 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
     shaded.shadow = &*r.shadow;
     shaded.sun = &sun;
     shaded.eye = glm::vec3(glm::inverse(view)[3]);
-    const std::span<const glm::vec3> joints = drawn_joint_positions(input);
-    shaded.shadows = r.shadow->begin(sun.to_sun, joints, 0.35f);
+    std::span<const glm::vec3> casters = drawn_joint_positions(input);
+    if (casters.empty()) {
+      // Bodies without skeletons (a caller drawing meshes only): the corners of their vertices' bounds.
+      glm::vec3 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
+      for (std::size_t k = 0; k < bodies.batch_count(); ++k)
+        if (const BodyBatch batch = bodies.batch(k); const BodyDrawInput* b = std::get_if<BodyDrawInput>(&batch))
+          for (std::size_t w = 0; w < b->walker_count; ++w)
+            for (std::size_t v = 0; v < b->vertex_count; ++v) {
+              const std::size_t i = w * b->stride + v;
+              const glm::vec3 p(b->px[i], b->py[i], b->pz[i]);
+              if (std::isfinite(p.x + p.y + p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
+            }
+      r.casters.assign({lo, hi});
+      if (lo.x <= hi.x) casters = r.casters;
+    }
+    shaded.shadows = r.shadow->begin(sun.to_sun, casters, 0.35f);
     if (shaded.shadows) {
       r.body.draw_shadow(bodies, *r.shadow);
       r.props.draw_shadow(*r.shadow);

@@ -131,8 +131,10 @@ SurfaceClasses surface_materials(const Mesh& mesh) {
     const std::string s(side);
     const int shin = part_index(s + "Shin"), foot = part_index(s + "Foot"), toe = part_index(s + "Toe");
     double ankle = 0.0;
+    // A shoe reaches a little above the part boundary, which runs low under the ankle bones: cut there, the top
+    // of the instep showed as trouser.
     if (shin >= 0 && foot >= 0 && boundary_height(shin, foot, ankle))
-      plane_cut({shin, foot, toe}, up, ankle, SurfaceMaterial::Bottom, SurfaceMaterial::Shoes);
+      plane_cut({shin, foot, toe}, up, ankle + 0.025, SurfaceMaterial::Bottom, SurfaceMaterial::Shoes);
     // Short sleeves: across the upper arm, two fifths of the way up from the elbow (the upper arm / forearm
     // boundary), square to the arm whatever its rest pose.
     const int upper = part_index(s + "Shldr"), fore = part_index(s + "ForeArm");

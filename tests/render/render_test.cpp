@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <set>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -26,6 +27,8 @@
 
 #include "components/skeleton.h"
 #include "io/image_writer.h"
+#include "profiling/profiler.h"
+#include "render/appearance.h"
 #include "render/body_pass.h"
 #include "render/camera.h"
 #include "render/crowd_renderer.h"
@@ -422,6 +425,99 @@ TEST_F(RenderTest, PerVertexColoursTintOnlyWhereTheirAlphaSays) {
   renderer_->render(SkeletonDrawInput{}, view, projection, &bodies);
   const Rgba plain = colour_at(walker1);
   EXPECT_GT(plain[0], plain[2]) << "without colours the last tint must not stick";
+}
+
+float luminance(const Rgba& c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
+
+// RenderQuality::High with the sun overhead: each box hangs above the ground and shadows it straight down, so
+// the ground under a box is darker than the ground a metre in front of it, which no shadow reaches; at low
+// quality (no shadows) the two are lit alike.
+TEST_F(RenderTest, HighQualityBodiesShadowTheGroundUnderThem) {
+  const TwoBoxBodies boxes;
+  BodyDrawInput bodies = boxes.input();
+  renderer_->options().draw_ground = true;
+  renderer_->options().draw_skeleton = false;
+  renderer_->options().to_sun = {0.0f, 1.0f, 0.0f};
+  OrbitCamera camera = figure_camera();
+  camera.target = {0.0f, 0.3f, 0.0f};
+  camera.pitch = 0.7f;
+  const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
+  const auto ground_ratio = [&](RenderQuality quality) {
+    renderer_->options().quality = quality;
+    renderer_->render(SkeletonDrawInput{}, view, projection, &bodies);
+    std::vector<std::uint8_t> image;
+    renderer_->read_rgba(image);
+    const Pixel under = project({-0.6f, 0.0f, 0.0f}, view, projection), open = project({-0.6f, 0.0f, 1.0f}, view, projection);
+    return luminance(pixel_at(image, static_cast<int>(under.x), static_cast<int>(under.y))) /
+           luminance(pixel_at(image, static_cast<int>(open.x), static_cast<int>(open.y)));
+  };
+  EXPECT_LT(ground_ratio(RenderQuality::High), 0.75f);
+  EXPECT_GT(ground_ratio(RenderQuality::Low), 0.95f);
+}
+
+// Each walker wears its key's palette (render/appearance.h), split per pixel at its surface cut: boxes whose
+// upper half is the top and lower half the bottom show the palettes' colours where they should, and two keys
+// with different shirts dress the two boxes differently.
+TEST_F(RenderTest, HighQualityDressesEachWalkerInItsKeysColours) {
+  const TwoBoxBodies boxes;
+  // Two keys whose shirts differ most in red, and a first key whose shirt and trousers differ in red too.
+  std::uint32_t k0 = 0, k1 = 1;
+  float best = 0.0f;
+  for (std::uint32_t a = 0; a < 60; ++a)
+    for (std::uint32_t b = 0; b < 60; ++b) {
+      const WalkerPalette pa = walker_palette(a), pb = walker_palette(b);
+      const float shirts = pa[1].r - pb[1].r, halves = pa[1].r - pa[2].r;
+      if (shirts > best && halves > 0.15f) best = shirts, k0 = a, k1 = b;
+    }
+  ASSERT_GT(best, 0.3f) << "test setup: the palettes have no two such keys";
+  const std::uint32_t keys[2] = {k0, k1};
+  const std::uint8_t top_over_bottom =
+      static_cast<std::uint8_t>(static_cast<unsigned>(SurfaceMaterial::Top) | static_cast<unsigned>(SurfaceMaterial::Bottom) << 4);
+  std::vector<std::uint8_t> materials(boxes.per_walker, top_over_bottom);
+  std::vector<float> cut(boxes.per_walker);
+  // Every box corner's distance to the cut: +1 above, -1 below, so each face splits at half its height.
+  for (std::size_t v = 0; v < boxes.per_walker; ++v) cut[v] = boxes.positions[v].y > 1.0f ? 1.0f : -1.0f;
+  BodyDrawInput bodies = boxes.input();
+  bodies.walker_keys = keys;
+  bodies.materials = materials;
+  bodies.material_cut = cut;
+  renderer_->options().quality = RenderQuality::High;
+  renderer_->options().draw_ground = false;
+  renderer_->options().draw_skeleton = false;
+  const OrbitCamera camera = figure_camera();
+  const glm::mat4 view = camera.view(), projection = camera.projection(kAspect);
+  renderer_->render(SkeletonDrawInput{}, view, projection, &bodies);
+  std::vector<std::uint8_t> image;
+  renderer_->read_rgba(image);
+  const auto at = [&](const glm::vec3& p) {
+    const Pixel q = project(p, view, projection);
+    return pixel_at(image, static_cast<int>(q.x), static_cast<int>(q.y));
+  };
+  // Front faces (z = 0.2): walker 0 spans y 0.5..1.5 (cut at 1.0), walker 1 y 0.3..1.2 (cut at 0.75).
+  const Rgba shirt0 = at({-0.6f, 1.3f, 0.2f}), trousers0 = at({-0.6f, 0.7f, 0.2f});
+  const Rgba shirt1 = at({0.6f, 1.05f, 0.2f});
+  EXPECT_GT(shirt0[0], trousers0[0] + 20) << "walker 0's shirt is redder than its trousers";
+  EXPECT_GT(shirt0[0], shirt1[0] + 20) << "walker 0's shirt is redder than walker 1's";
+}
+
+// With a profiler set, each pass of a frame is its own scope; without one, nothing is recorded.
+TEST_F(RenderTest, PassesAreTimedWhenAProfilerIsSet) {
+  const TwoBoxBodies boxes;
+  BodyDrawInput bodies = boxes.input();
+  renderer_->options().quality = RenderQuality::High;
+  Profiler profiler(10, true);
+  renderer_->set_profiler(&profiler);
+  const OrbitCamera camera = figure_camera();
+  profiler.begin_frame();
+  renderer_->render(SkeletonDrawInput{}, camera.view(), camera.projection(kAspect), &bodies);
+  profiler.end_frame();
+  std::set<std::string> names;
+  for (const SystemStats& s : profiler.stats()) names.insert(s.name);
+  for (const char* pass : {"shadow_map", "ground", "skeletons", "bodies", "resolve"}) EXPECT_TRUE(names.count(pass)) << pass;
+  const std::size_t events = profiler.events().size();
+  renderer_->set_profiler(nullptr);
+  renderer_->render(SkeletonDrawInput{}, camera.view(), camera.projection(kAspect), &bodies);
+  EXPECT_EQ(profiler.events().size(), events);
 }
 
 TEST_F(RenderTest, SameInputGivesIdenticalPixels) {
