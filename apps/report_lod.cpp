@@ -436,7 +436,6 @@ int run_lod_report(const LodReportOptions& o) {
     auto probe = make_crowd(o, 8, DetailLevel::automatic());
     if (!crowd_may_use_impostors(*probe)) throw std::invalid_argument("this rig cannot have impostors (it needs a body and a walk)");
     ImpostorBakeOptions bake;
-    bake.skin_color = r.renderer->options().skin_color;
     bake.muscles = probe->muscles_enabled();
     const auto shared_atlas =
         std::make_shared<const ImpostorAtlas>(bake_impostor_atlas(probe->rig(), probe->motion.style, bake));

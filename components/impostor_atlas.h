@@ -8,7 +8,9 @@
 // 2 pi a / azimuths about +Y (0 = in front, the walker facing +Z; increasing counter-clockwise seen from above,
 // towards +X) and elevation e / (elevations - 1) * max_elevation above the horizon, orthographically, the cell's
 // vertical axis the world's up projected onto the image plane. Two images, RGBA8, rows top to bottom:
-//   colour        albedo (before lighting) premultiplied by coverage; alpha = coverage
+//   colour        dress weights premultiplied by coverage: r the top, g the bottom (shoes included: a few texels
+//                 at this size), b hair, skin the rest (rig/surface_material.h); alpha = coverage. The renderer
+//                 turns them into each walker's colours (render/appearance.h); at low quality, the skin colour
 //   normal_depth  rgb = (normal * 0.5 + 0.5) * coverage, the normal in the walker's own frame (humanoid space,
 //                 facing +Z); alpha = (depth / depth_range_m * 0.5 + 0.5) * coverage, depth the surface's
 //                 distance in front of (+) or behind (-) the plane through the cell centre facing the viewer
@@ -18,7 +20,9 @@
 // Why these choices: a per-phase layer is one texture-array lookup; the nearest phase and view rather than blends
 // of neighbours, because blending two images of a walking figure shows two sets of limbs (Tecchia et al. picked
 // the nearest view too); albedo and normal rather than a lit colour, because
-// a baked lit image would carry the bake's light wherever the walker turns.
+// a baked lit image would carry the bake's light wherever the walker turns; weights rather than an albedo, because
+// one atlas then dresses every walker in its own colours (weights filter and mip correctly, where class numbers
+// would blend into a third class at every edge).
 #include <cstddef>
 #include <cstdint>
 #include <vector>

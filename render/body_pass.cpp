@@ -136,7 +136,7 @@ void BodyPass::draw(const BodySource& bodies, const glm::mat4& view, const glm::
                          [&](const ImpostorBatch& b) {
                            if (b.walker_count == 0) return;
                            if (!impostors_) impostors_ = std::make_unique<ImpostorPass>();
-                           impostors_->draw(b, view, projection);
+                           impostors_->draw(b, view, projection, skin_color, shading);
                          }},
                batch_cache_[k]);
   ++frame_;

@@ -68,6 +68,8 @@ struct ImpostorBatch {
   const ImpostorAtlas* atlas = nullptr;
   const float *x = nullptr, *y = nullptr, *z = nullptr, *heading = nullptr, *scale = nullptr, *phase = nullptr;
   std::size_t walker_count = 0;
+  // RenderQuality::High: a key per walker choosing its colours, as BodyDrawInput::walker_keys; optional.
+  const std::uint32_t* walker_keys = nullptr;
 };
 
 // One draw's worth of bodies; the alternative held is the batch's kind (see the top of this file to add one).

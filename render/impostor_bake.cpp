@@ -24,6 +24,7 @@
 #include "render/gl_program.h"
 #include "render/scene_draw.h"
 #include "rig/body_cache.h"
+#include "rig/surface_material.h"
 #include "scene/body_settings.h"
 #include "scene/crowd.h"
 #include "scene/spawn.h"
@@ -33,7 +34,7 @@ namespace strata {
 namespace {
 
 // Bumped whenever the bake's output for the same inputs changes (framing, encoding, shaders).
-constexpr std::uint32_t kBakeVersion = 2;
+constexpr std::uint32_t kBakeVersion = 3;  // 3: dress weights instead of the skin colour
 
 
 // A framebuffer with an albedo and a normal-depth colour attachment (and depth), of one atlas layer's size.
@@ -99,7 +100,7 @@ std::uint64_t impostor_atlas_key(const Rig& rig, const GaitStyle& style, const I
   const ImpostorAtlasLayout& l = options.layout;
   h.value(l.phases), h.value(l.azimuths), h.value(l.elevations), h.value(l.max_elevation_deg);
   h.value(l.cell_width), h.value(l.cell_height);
-  h.value(options.mesh_level), h.value(options.speed_m_s), h.value(options.skin_color);
+  h.value(options.mesh_level), h.value(options.speed_m_s);
   return h.h;
 }
 
@@ -218,10 +219,32 @@ ImpostorAtlas bake_impostor_atlas(const Rig& rig, const GaitStyle& style, const 
   glDepthMask(GL_TRUE);
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   glUseProgram(p);
-  glProgramUniform3fv(p, glGetUniformLocation(p, "u_color"), 1, glm::value_ptr(options.skin_color));
   glProgramUniform1f(p, glGetUniformLocation(p, "u_depth_range"), atlas.depth_range_m);
   glVertexAttrib4f(6, 0.0f, 0.0f, 0.0f, 0.0f);
-  glVertexAttrib4f(7, 0.0f, 0.0f, 0.0f, 0.0f);
+  // The dress weights of each vertex (the top, the bottom with the shoes, hair; skin the rest) as body.vert's
+  // per-vertex colour, the same for every phase: the impostor shader mixes the walker's palette by them.
+  GlObject dress(GlKind::kBuffer);
+  {
+    const SkinLayout& layout = crowd.skin.layouts[static_cast<std::size_t>(level)];
+    std::vector<std::uint32_t> weights(layout.vertex_count, 0xff000000u);
+    if (rig.body && level < static_cast<int>(rig.body->levels.size())) {
+      const SurfaceClasses classes = layout_materials(rig.body->levels[static_cast<std::size_t>(level)].mesh, layout);
+      for (std::size_t v = 0; v < classes.size() && v < weights.size(); ++v) {
+        const SurfaceMaterial m = classes.at(v);
+        const unsigned byte = m == SurfaceMaterial::Top                                    ? 0u
+                              : m == SurfaceMaterial::Bottom || m == SurfaceMaterial::Shoes ? 8u
+                              : m == SurfaceMaterial::Hair                                  ? 16u
+                                                                                            : 32u;
+        if (byte < 32u) weights[v] |= 0xffu << byte;
+      }
+    }
+    glNamedBufferData(dress.id(), static_cast<GLsizeiptr>(weights.size() * sizeof(std::uint32_t)), weights.data(),
+                      GL_STATIC_DRAW);
+    glVertexArrayAttribFormat(vao.id(), 7, 4, GL_UNSIGNED_BYTE, GL_TRUE, 0);
+    glVertexArrayAttribBinding(vao.id(), 7, 7);
+    glVertexArrayVertexBuffer(vao.id(), 7, dress.id(), 0, sizeof(std::uint32_t));
+    glEnableVertexArrayAttrib(vao.id(), 7);
+  }
   const float distance = 2.0f * atlas.depth_range_m + 1.0f;
   const glm::mat4 projection = glm::ortho(-0.5f * atlas.cell_width_m, 0.5f * atlas.cell_width_m,
                                           -0.5f * atlas.cell_height_m, 0.5f * atlas.cell_height_m,
@@ -302,11 +325,10 @@ ImpostorAtlas load_or_bake_impostor_atlas(const Rig& rig, const GaitStyle& style
   return atlas;
 }
 
-const ImpostorAtlas* ensure_impostor_atlas(Crowd& crowd, const glm::vec3& skin_color) {
+const ImpostorAtlas* ensure_impostor_atlas(Crowd& crowd) {
   if (!crowd_may_use_impostors(crowd)) return nullptr;
   if (crowd.impostor_atlas) return crowd.impostor_atlas.get();
   ImpostorBakeOptions options;
-  options.skin_color = skin_color;
   options.muscles = crowd.muscles_enabled();
   options.skinning = crowd.skin.mode;
   // The crowd's mean lane speed, rounded to 0.1 m/s so crowds that differ a little share one cached atlas.

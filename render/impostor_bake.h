@@ -35,7 +35,6 @@ struct ImpostorBakeOptions {
   // 3.5x longer to bake (32 s against 9 s here) for differences below a pixel at impostor sizes.
   int mesh_level = 2;
   float speed_m_s = 1.2f;   // the walk baked
-  glm::vec3 skin_color{0.80f, 0.62f, 0.52f};  // RenderOptions::skin_color
   bool muscles = true;      // with the rig's muscle layer when it has one
   SkinningMode skinning = SkinningMode::Linear;  // the crowd's (scene/body_settings.h set_skinning_mode)
 };
@@ -55,6 +54,6 @@ ImpostorAtlas load_or_bake_impostor_atlas(const Rig& rig, const GaitStyle& style
 // The atlas of `crowd`'s rig and walk (its mean lane speed, its skin colour), loaded or baked once and kept in
 // crowd.impostor_atlas; nothing when the crowd cannot have impostors (scene/body_settings.h). Needs a current GL
 // context the first time.
-const ImpostorAtlas* ensure_impostor_atlas(Crowd& crowd, const glm::vec3& skin_color);
+const ImpostorAtlas* ensure_impostor_atlas(Crowd& crowd);
 
 }  // namespace strata

@@ -10,10 +10,25 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
 
+#include "render/appearance.h"
+
 namespace strata {
 
+namespace {
+
+// impostor.frag has no #version line: each program puts its own header in front (see the shader's comment).
+GlObject link_impostor_program(bool shaded) {
+  const std::string header = shaded ? std::string(shader_source("render/shaders/shading.glsl")) + "\n#define SHADED 1\n"
+                                    : std::string("#version 450 core\n");
+  return link_program("render/shaders/impostor.vert", shader_source("render/shaders/impostor.vert"),
+                      "render/shaders/impostor.frag",
+                      header + "#line 1\n" + std::string(shader_source("render/shaders/impostor.frag")));
+}
+
+}  // namespace
+
 ImpostorPass::ImpostorPass()
-    : program_(link_program("render/shaders/impostor.vert", "render/shaders/impostor.frag")),
+    : program_(link_impostor_program(false)),
       vao_(GlKind::kVertexArray),
       instances_(GlKind::kBuffer) {
   const GLuint vao = vao_.id();
@@ -85,7 +100,8 @@ void ImpostorPass::upload(const ImpostorAtlas& atlas) {
   uploaded_key_ = atlas.key;
 }
 
-void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm::mat4& projection) {
+void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm::mat4& projection,
+                        const glm::vec3& skin_color, const ShadedFrame* shading) {
   if (b.walker_count == 0) return;
   const ImpostorAtlas& atlas = *b.atlas;
   if (uploaded_ != &atlas || uploaded_key_ != atlas.key) upload(atlas);
@@ -97,10 +113,29 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
     glNamedBufferSubData(instances_.id(), a * bytes, bytes, arrays[a]);
     glVertexArrayVertexBuffer(vao, a, instances_.id(), a * bytes, sizeof(float));
   }
-  const GLuint p = program_.id();
+  if (shading && !shaded_program_) shaded_program_ = link_impostor_program(true);
+  const GLuint p = shading ? shaded_program_.id() : program_.id();
   const ImpostorAtlasLayout& l = atlas.layout;
   const glm::mat4 inverse_view = glm::inverse(view);
   const glm::vec3 eye(inverse_view[3]);
+  if (shading) {
+    // Each walker's palette by its key, as the body pass does (render/appearance.h).
+    palette_scratch_.resize(b.walker_count * kSurfaceMaterialCount);
+    const WalkerPalette plain = plain_palette(skin_color);
+    for (std::size_t w = 0; w < b.walker_count; ++w) {
+      const WalkerPalette palette = b.walker_keys ? walker_palette(b.walker_keys[w]) : plain;
+      std::copy(palette.begin(), palette.end(), palette_scratch_.begin() + static_cast<std::ptrdiff_t>(w * kSurfaceMaterialCount));
+    }
+    glNamedBufferData(palettes_.id(), static_cast<GLsizeiptr>(palette_scratch_.size() * sizeof(glm::vec4)),
+                      palette_scratch_.data(), GL_STREAM_DRAW);
+    glTextureBuffer(palettes_texture_.id(), GL_RGBA32F, palettes_.id());
+    glBindTextureUnit(2, palettes_texture_.id());
+    glProgramUniform1i(p, glGetUniformLocation(p, "u_palettes"), 2);
+    glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view_inverse"), 1, GL_FALSE, glm::value_ptr(inverse_view));
+    shading->apply(p);
+  } else {
+    glProgramUniform3fv(p, glGetUniformLocation(p, "u_skin_color"), 1, glm::value_ptr(skin_color));
+  }
   glUseProgram(p);
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));
@@ -125,6 +160,7 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
   glDisable(GL_SAMPLE_ALPHA_TO_COVERAGE);
   glBindTextureUnit(0, 0);
   glBindTextureUnit(1, 0);
+  glBindTextureUnit(2, 0);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
   drawn_ += b.walker_count;
 }

@@ -8,9 +8,12 @@
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+#include <glm/vec3.hpp>
 
 #include "render/body_source.h"
 #include "render/gl_program.h"
+#include "render/shadow_pass.h"
 
 namespace strata {
 
@@ -21,7 +24,10 @@ class ImpostorPass {
   ImpostorPass();
   // Throws std::invalid_argument when a batch with walkers has no complete atlas or misses an array.
   static void check(const ImpostorBatch& batch);
-  void draw(const ImpostorBatch& batch, const glm::mat4& view, const glm::mat4& projection);
+  // `shading`: dressed in each walker's palette and lit as RenderQuality::High lights meshes; null: the skin
+  // colour under the low-quality headlight.
+  void draw(const ImpostorBatch& batch, const glm::mat4& view, const glm::mat4& projection, const glm::vec3& skin_color,
+            const ShadedFrame* shading = nullptr);
   std::size_t impostors_drawn() const { return drawn_; }
   void reset_count() { drawn_ = 0; }
 
@@ -29,6 +35,9 @@ class ImpostorPass {
   void upload(const ImpostorAtlas& atlas);
 
   GlObject program_, vao_, instances_;
+  GlObject shaded_program_;  // made on the first shaded frame
+  GlObject palettes_{GlKind::kBuffer}, palettes_texture_{GlKind::kTextureBuffer};
+  std::vector<glm::vec4> palette_scratch_;
   // Per cell (phase-major, then elevation, then azimuth), the part of the cell the walker covers, as texture
   // coordinates within the cell (x0, y0, x1, y1): quads are shrunk to it, which halves the fragments shaded.
   GlObject cell_bounds_{GlKind::kBuffer};

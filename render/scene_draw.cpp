@@ -98,7 +98,8 @@ std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd, RenderScratch& s
   return inputs;
 }
 
-ImpostorBatch impostor_batch(const Crowd& crowd, std::vector<float>* standing_phase) {
+ImpostorBatch impostor_batch(const Crowd& crowd, std::vector<float>* standing_phase,
+                             std::vector<std::uint32_t>* walker_keys) {
   ImpostorBatch batch;
   const SoaTable& t = crowd.table(DetailSlot::Impostor);
   if (t.size() == 0 || !crowd.impostor_atlas) return batch;
@@ -117,6 +118,11 @@ ImpostorBatch impostor_batch(const Crowd& crowd, std::vector<float>* standing_ph
     batch.phase = standing_phase->data();
   }
   batch.walker_count = t.size();
+  if (walker_keys) {
+    walker_keys->resize(t.size());
+    for (std::size_t w = 0; w < t.size(); ++w) (*walker_keys)[w] = t.owner(static_cast<std::uint32_t>(w)).index;
+    batch.walker_keys = walker_keys->data();
+  }
   return batch;
 }
 
@@ -215,11 +221,11 @@ std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamer
   SkeletonDrawInput skeletons{&crowd.rig().skeleton, scratch.joints, with_joints};
   if (crowd.table(DetailSlot::Impostor).size() > 0) {
     // The first frame with impostors bakes (or loads) the rig's atlas: seconds once, then cached on disk.
-    ensure_impostor_atlas(crowd, renderer.options().skin_color);
+    ensure_impostor_atlas(crowd);
     impostor_feet(crowd, scratch.impostor_feet);
     skeletons.ground_points = scratch.impostor_feet;
     scratch.batches.assign(bodies.begin(), bodies.end());
-    scratch.batches.emplace_back(impostor_batch(crowd, &scratch.impostor_phase));
+    scratch.batches.emplace_back(impostor_batch(crowd, &scratch.impostor_phase, &scratch.impostor_keys));
     renderer.render(skeletons, camera.view(), camera.projection(aspect), BodyBatches(scratch.batches));
   } else {
     renderer.render(skeletons, camera.view(), camera.projection(aspect), bodies);

@@ -32,7 +32,9 @@ std::vector<BodyDrawInput> body_draw_inputs(const Crowd& crowd, RenderScratch& s
 // `standing_phase`: where a scenario's agents stand (kGaitIdle), their impostors show the walk's phase with the feet
 // passing each other (0.3: the right foot beside the left) in a copy kept there, instead of the phase they
 // stopped at (a stride apart). Null: the phase column as it is.
-ImpostorBatch impostor_batch(const Crowd& crowd, std::vector<float>* standing_phase = nullptr);
+// `walker_keys`: filled with each impostor's appearance key (its entity slot) and handed to the batch; null: none.
+ImpostorBatch impostor_batch(const Crowd& crowd, std::vector<float>* standing_phase = nullptr,
+                             std::vector<std::uint32_t>* walker_keys = nullptr);
 // Bounds of every skinned vertex drawn and of every impostor (its feet up to its stature); false when none.
 bool body_bounds(const Crowd& crowd, glm::vec3& lo, glm::vec3& hi);
 // Every posed walker's world-space joint positions, walker-major, table by table (the skeleton pass's input and
@@ -61,6 +63,7 @@ struct RenderScratch {
   std::vector<glm::vec3> joints;
   std::vector<glm::vec3> impostor_feet;
   std::vector<float> impostor_phase;
+  std::vector<std::uint32_t> impostor_keys;
   std::vector<BodyBatch> batches;
 };
 

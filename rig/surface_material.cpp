@@ -182,7 +182,7 @@ SurfaceClasses surface_materials(const Mesh& mesh) {
       }
     }
   }
-  // Hair: the head's vertices above a hairline that is high over the forehead, drops to the top of the ears at
+  // Hair: the head's vertices above a hairline that is high over the forehead, drops to just above the ears at
   // the sides and lower still behind (the nape). Measured from the eyes and the head's centroid (H-Anim faces +Z,
   // +Y up), so it follows a head of any size; without eyes there is no face to measure from and the head stays
   // skin.
@@ -200,7 +200,7 @@ SurfaceClasses surface_materials(const Mesh& mesh) {
   if (eyes == 0 || heads == 0) return out;
   const glm::dvec3 eye = eye_sum / static_cast<double>(eyes), centre = head_sum / static_cast<double>(heads);
   const double depth = std::max(eye.z - centre.z, 1e-3);  // eyes in front of the head's centroid
-  const double forehead = eye.y + 0.5 * (head_top - eye.y), side = eye.y + 0.01, nape = eye.y - 0.07;
+  const double forehead = eye.y + 0.5 * (head_top - eye.y), side = eye.y + 0.035, nape = eye.y - 0.07;
   for (std::size_t v = 0; v < n; ++v) {
     if (part_of[v] != head) continue;
     const glm::dvec3 p(mesh.positions[v]);

@@ -25,6 +25,7 @@ flat out vec3 v_cell_to_eye;  // unit, view space: the direction the chosen cell
 flat out mat3 v_local_to_view;
 flat out float v_depth_scale;  // metres of baked depth range at this walker's scale
 flat out float v_ahead;        // how far in front of the walker's centre the quad stands
+flat out int v_walker;         // the instance: the walker's index in the batch (its palette under --quality high)
 const float kTwoPi = 6.28318530718;
 void main() {
   vec2 corner = vec2(gl_VertexID & 1, gl_VertexID >> 1);  // (0,0) (1,0) (0,1) (1,1): a triangle strip
@@ -73,5 +74,6 @@ void main() {
   // The walker's frame (heading about +Y) to view space, once per walker rather than per fragment.
   v_local_to_view = mat3(u_view) * mat3(vec3(c, 0.0, -s), vec3(0.0, 1.0, 0.0), vec3(s, 0.0, c));
   v_depth_scale = u_depth_range * a_scale;
+  v_walker = gl_InstanceID;
   gl_Position = u_projection * view_position;
 }

@@ -15,7 +15,9 @@ uniform float u_shadow_texel;   // one shadow map texel in map coordinates
 uniform float u_shadow_world;   // one shadow map texel in metres (the normal offset's unit)
 uniform int u_shadows;          // 0: no shadow map this frame
 
-// Fraction of the sun that reaches `world`: a 4x4 percentage-closer filter over the depth map, with the lookup
+// Fraction of the sun that reaches `world`: four taps a texel apart, each a hardware 2x2 percentage-closer
+// comparison with bilinear weights (the map's GL_LINEAR compare mode), so a 3x3-texel soft edge for four lookups;
+// sixteen taps cost llvmpipe a third more on the ground pass for an edge one can hardly tell apart. The lookup is
 // moved out along the normal by about a texel (normal-offset shadows: no acne on surfaces grazing the light, and
 // no peter-panning of the feet off the ground the way a large constant depth bias would).
 float sun_visibility(vec3 world, vec3 n) {
@@ -25,10 +27,10 @@ float sun_visibility(vec3 world, vec3 n) {
   vec4 s = u_light_matrix * vec4(p, 1.0);
   if (s.x <= 0.0 || s.y <= 0.0 || s.x >= 1.0 || s.y >= 1.0 || s.z >= 1.0) return 1.0;
   float sum = 0.0;
-  for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x)
-      sum += texture(u_shadow_map, vec3(s.xy + (vec2(x, y) - 1.5) * u_shadow_texel, s.z - 0.0005));
-  return sum / 16.0;
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 2; ++x)
+      sum += texture(u_shadow_map, vec3(s.xy + (vec2(x, y) - 0.5) * u_shadow_texel, s.z - 0.0005));
+  return 0.25 * sum;
 }
 
 vec3 ambient_light(vec3 n) { return mix(u_bounce_color, u_sky_color, 0.5 + 0.5 * n.y); }

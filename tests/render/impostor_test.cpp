@@ -65,6 +65,28 @@ class ImpostorTest : public ::testing::Test {
 GlContext* ImpostorTest::context_ = nullptr;
 ImpostorAtlas* ImpostorTest::atlas_ = nullptr;
 
+// The colour image holds dress weights (components/impostor_atlas.h): fully covered texels of the shirt, the
+// trousers and the hair, and of bare skin (no weight), all present in the front view at heel strike; no texel
+// weighs more than one in all.
+TEST_F(ImpostorTest, TheAtlasHoldsEachTexelsDressWeights) {
+  const ImpostorAtlas& a = *atlas_;
+  const ImpostorAtlasLayout& l = a.layout;
+  std::size_t top = 0, bottom = 0, hair = 0, skin = 0, overweight = 0;
+  for (int y = 0; y < l.cell_height; ++y)
+    for (int x = 0; x < l.cell_width; ++x) {
+      const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(l.layer_width()) + static_cast<std::size_t>(x)) * 4;
+      if (a.color[i + 3] != 255) continue;
+      const int r = a.color[i], g = a.color[i + 1], b = a.color[i + 2];
+      top += r > 240, bottom += g > 240, hair += b > 240, skin += r + g + b < 15;
+      overweight += r + g + b > 255 + 3;
+    }
+  EXPECT_GT(top, 50u);
+  EXPECT_GT(bottom, 50u);
+  EXPECT_GT(hair, 5u);
+  EXPECT_GT(skin, 20u);
+  EXPECT_EQ(overweight, 0u);
+}
+
 TEST_F(ImpostorTest, EveryCellHoldsTheWalkerWithUnitNormals) {
   const ImpostorAtlas& a = *atlas_;
   ASSERT_TRUE(a.complete());
