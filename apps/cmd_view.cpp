@@ -69,6 +69,7 @@ void render_scene(ViewSession& session, CrowdRenderer& renderer, const OrbitCame
   ViewPanelState& panel = session.panel();
   RenderFrameOptions options;
   options.skeleton_overlay = panel.show_skeleton;
+  renderer.options().quality = panel.high_quality ? RenderQuality::High : RenderQuality::Low;
   options.recolour = [&session](std::vector<BodyDrawInput>& bodies) { session.colour_draws(bodies); };
   panel.triangles_drawn = render_frame(session.scene(), renderer, camera, aspect, viewport_height, scratch, options);
 }
@@ -84,6 +85,8 @@ float mean_fps(const Profiler& profiler) {
 void apply_start_options(const ViewOptions& o, ViewSession& session) {
   ViewPanelState& panel = session.panel();
   panel.select_tab = o.tab;
+  panel.show_skeleton = o.skeleton_overlay;
+  panel.high_quality = o.quality == RenderQuality::High;
   if (o.edit_joint.empty()) return;
   const int joint = session.scene().rig().skeleton.find_joint(o.edit_joint);
   if (joint < 0) throw std::invalid_argument("--edit-binding: no joint '" + o.edit_joint + "' in the skeleton");
@@ -102,8 +105,7 @@ int run_view_headless(const ViewOptions& o) {
     ViewSession session(o.scene);
     apply_start_options(o, session);
     std::unique_ptr<GlContext> context = create_headless_gl_context();
-    CrowdRenderer renderer(o.width, o.height);
-    renderer.options().quality = o.quality;
+    CrowdRenderer renderer(o.width, o.height);  // its quality follows the panel (render_scene)
     std::optional<ImGuiLayer> ui;
     if (!o.no_panel) ui.emplace();
     Profiler profiler(120, false);
@@ -159,7 +161,6 @@ int run_view(const ViewOptions& o) {
     ViewSession session(o.scene);
     apply_start_options(o, session);
     ViewPanelState& panel = session.panel();
-    panel.show_skeleton = o.skeleton_overlay;
 
     WindowOptions wo;
     wo.width = o.width;
@@ -167,8 +168,7 @@ int run_view(const ViewOptions& o) {
     wo.visible = !o.hidden;
     GlfwWindow window(wo);
     glm::ivec2 fb = window.framebuffer_size();
-    CrowdRenderer renderer(fb.x, fb.y);
-    renderer.options().quality = o.quality;
+    CrowdRenderer renderer(fb.x, fb.y);  // its quality follows the panel (render_scene)
     // The panel attaches to the window's callbacks; --no-panel leaves the scene alone on screen.
     std::optional<ImGuiLayer> ui;
     if (!o.no_panel) ui.emplace(window.native_handle());

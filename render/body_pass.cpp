@@ -114,9 +114,12 @@ void BodyPass::draw_shadow(const BodySource& bodies, const ShadowPass& shadow) {
     if (const BodyDrawInput* b = std::get_if<BodyDrawInput>(&batch_cache_[k]);
         b && b->walker_count > 0 && !b->triangles.empty()) {
       stream(*b, slots_[*slot[k]], slot_data_[*slot[k]]);
+      // Positions only: the normals' arrays stay unfetched.
+      for (GLuint a = 3; a < 6; ++a) glDisableVertexArrayAttrib(vao_.id(), a);
       glDisableVertexArrayAttrib(vao_.id(), 7);
       glUseProgram(p);
       bind_draw(*b);
+      for (GLuint a = 3; a < 6; ++a) glEnableVertexArrayAttrib(vao_.id(), a);
     }
 }
 

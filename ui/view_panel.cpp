@@ -100,6 +100,9 @@ void playback_section(ViewPanelState& s, UiProbe* probe) {
   ImGui::SameLine();
   ImGui::Checkbox("skeletons", &s.show_skeleton);
   note(probe, "skeletons");
+  ImGui::SameLine();
+  ImGui::Checkbox("high quality", &s.high_quality);
+  note(probe, "high quality");
 }
 
 void crowd_section(Crowd& scene, ViewPanelState& s, UiProbe* probe) {

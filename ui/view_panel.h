@@ -78,6 +78,7 @@ struct ViewPanelState {
   bool screenshot_requested = false;
   bool frame_camera_requested = false;
   bool show_skeleton = false;
+  bool high_quality = true;       // RenderQuality::High (sun, shadows, clothes); off: the low-quality headlight
   // Crowd: a new crowd of `walkers` with `seed` when rebuild_requested.
   int walkers = 25;
   int seed = 1;
