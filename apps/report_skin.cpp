@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <set>
 
 #include <glm/gtc/quaternion.hpp>
@@ -290,6 +291,59 @@ void write_modes_figure(const std::filesystem::path& dir) {
   write_image(dir / "skin_modes.png", 3 * kPanel, 2 * kPanel, 4, image);
 }
 
+// The body's proportions against the anthropometry notes' references (../shared/notes/anthropometry.md §5 and
+// Winter's segment fractions of stature), scaled to the body's own stature: stature (sole to crown), shoulder
+// width (the widest extent of the trunk and upper arms at the shoulder joints' height, deltoids included, against
+// ANSUR's bideltoid breadth, 0.510 of 1.756 m), hip width (the widest extent at the hip joints' height against ANSUR's hip breadth, 0.346 of
+// 1.756 m), and the limb segments joint to joint against Winter / Drillis & Contini (upper arm 0.186 H, forearm
+// 0.146 H, thigh 0.245 H, shank 0.246 H).
+nlohmann::json anthropometry_json(const Mesh& mesh, const Skeleton& skeleton) {
+  float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+  for (const glm::vec3& p : mesh.positions) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
+  const double stature = hi - lo;
+  auto joint = [&](const char* name) {
+    const int j = skeleton.find_joint(name);
+    if (j < 0) throw std::runtime_error(std::string("report skin: the default skeleton has no ") + name);
+    return glm::dvec3(skeleton.centers[static_cast<std::size_t>(j)]);
+  };
+  // Widest x extent of the body within 1.5 cm of height y (the hands excluded: at hip height they hang beside it).
+  auto width_at = [&](double y) {
+    double x0 = 1e9, x1 = -1e9;
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+      if (std::abs(mesh.positions[v].y - y) > 0.015) continue;
+      const std::string& part = mesh.part.size() == mesh.vertex_count() ? mesh.part_names[mesh.part[v]] : std::string();
+      if (part.find("Hand") != std::string::npos || part.find("ForeArm") != std::string::npos ||
+          part.find("Thumb") != std::string::npos || part.find("Index") != std::string::npos ||
+          part.find("Mid") != std::string::npos || part.find("Ring") != std::string::npos ||
+          part.find("Pinky") != std::string::npos)
+        continue;
+      x0 = std::min(x0, static_cast<double>(mesh.positions[v].x));
+      x1 = std::max(x1, static_cast<double>(mesh.positions[v].x));
+    }
+    return x1 > x0 ? x1 - x0 : 0.0;
+  };
+  const double shoulder_y = 0.5 * (joint("l_shoulder").y + joint("r_shoulder").y);
+  const double hip_y = 0.5 * (joint("l_hip").y + joint("r_hip").y);
+  struct Row {
+    const char* key;
+    double value, reference;
+    const char* source;
+  };
+  const Row rows[] = {
+      {"stature_m", stature, 1.75, "the notes' default adult male"},
+      {"shoulder_width_m", width_at(shoulder_y), 0.510 / 1.756 * stature, "ANSUR II male bideltoid breadth 0.510 of 1.756 m"},
+      {"hip_width_m", width_at(hip_y), 0.346 / 1.756 * stature, "ANSUR II male hip breadth 0.346 of 1.756 m"},
+      {"upper_arm_m", glm::length(joint("l_shoulder") - joint("l_elbow")), 0.186 * stature, "Winter, 0.186 H"},
+      {"forearm_m", glm::length(joint("l_elbow") - joint("l_wrist")), 0.146 * stature, "Winter, 0.146 H"},
+      {"thigh_m", glm::length(joint("l_hip") - joint("l_knee")), 0.245 * stature, "Winter, 0.245 H"},
+      {"shank_m", glm::length(joint("l_knee") - joint("l_ankle")), 0.246 * stature, "Winter, 0.246 H"},
+  };
+  nlohmann::json out = nlohmann::json::object();
+  for (const Row& r : rows)
+    out[r.key] = {{"value", r.value}, {"reference", r.reference}, {"ratio", r.value / r.reference}, {"reference_source", r.source}};
+  return out;
+}
+
 int run_skin_report(const SkinReportOptions& o) {
   if (!check_outputs("report skin", {{"--json", o.json}, {"--images", o.images, true}})) return kExitFailure;
   try {
@@ -348,6 +402,14 @@ int run_skin_report(const SkinReportOptions& o) {
       out["modes"] = modes_report(rig, level0, o);
     }
     out["cage"] = {{"vertices", levels.cage.vertex_count()}, {"triangles", levels.cage.triangle_count()}};
+    // The shipped body is the procedural one (rig/body_generator.h); a body derived from the MakeHuman mesh is
+    // issue 20's next step.
+    out["body_source"] = "procedural";
+    out["anthropometry"] = anthropometry_json(levels.levels[0], rig.skeleton);
+    std::printf("anthropometry (level 0 against the notes' references):");
+    for (const auto& [key, row] : out["anthropometry"].items())
+      std::printf(" %s %.3f (%.2fx)", key.c_str(), row["value"].get<double>(), row["ratio"].get<double>());
+    std::printf("\n");
     out["walk_seconds"] = o.seconds;
     out["flexion_deg"] = 120;
     out["targets_met"] = targets;

@@ -210,6 +210,16 @@ TEST(StrataReport, SkinWritesLevelsBindingAndQuality) {
               level.at("vertices").get<int>());
     EXPECT_LT(level.at("elbow_volume_change_pct").get<double>(), 0.0) << "linear blend skinning loses volume";
   }
+  // Where the body comes from, and its proportions against the anthropometry references: every measure present,
+  // the stature the notes' 1.75 m, every ratio within a quarter of its reference.
+  EXPECT_EQ(j.at("body_source"), "procedural");
+  const auto& body = j.at("anthropometry");
+  for (const char* key : {"stature_m", "shoulder_width_m", "hip_width_m", "upper_arm_m", "forearm_m", "thigh_m", "shank_m"}) {
+    ASSERT_TRUE(body.contains(key)) << key;
+    EXPECT_NEAR(body.at(key).at("ratio").get<double>(), 1.0, 0.25) << key;
+    EXPECT_GT(body.at(key).at("value").get<double>(), 0.0) << key;
+  }
+  EXPECT_NEAR(body.at("stature_m").at("value").get<double>(), 1.75, 0.02);
   // The three skinning modes side by side on level 0.
   const auto& modes = j.at("modes");
   for (const char* mode : {"lbs", "dqs", "cor"})
