@@ -87,6 +87,12 @@ using CorCentreCache = PerLevelCache<CorCentres>;
 struct VertexOcclusion;
 using VertexOcclusionCache = PerLevelCache<VertexOcclusion>;
 
+struct Body;
+// Level `level` of `body` (0..2), or its cage for -1; null when it has no such level. The PerLevelCache slot of the
+// same level (3 for the cage) is per_level_slot(level).
+const BodyLevel* body_level_or_cage(const Body& body, int level);
+inline std::size_t per_level_slot(int level) { return level < 0 ? 3 : static_cast<std::size_t>(level); }
+
 struct Body {
   std::vector<BodyLevel> levels;
   // The low-resolution subdivision cage, bound like the levels; absent for imported bodies. Kept apart from
@@ -96,5 +102,11 @@ struct Body {
   CorCentreCache cor{};
   VertexOcclusionCache occlusion{};
 };
+
+inline const BodyLevel* body_level_or_cage(const Body& body, int level) {
+  if (level < 0) return body.cage ? &*body.cage : nullptr;
+  if (static_cast<std::size_t>(level) < body.levels.size() && level < 3) return &body.levels[static_cast<std::size_t>(level)];
+  return nullptr;
+}
 
 }  // namespace strata

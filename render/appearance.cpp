@@ -1,5 +1,6 @@
 #include "render/appearance.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 
@@ -64,6 +65,14 @@ WalkerPalette plain_palette(const glm::vec3& skin_srgb) {
   p[static_cast<std::size_t>(SurfaceMaterial::Eyes)] = linear(kIris[0], 0.3f);
   p[static_cast<std::size_t>(SurfaceMaterial::Sclera)] = linear(kSclera, 0.3f);
   return p;
+}
+
+void fill_palettes(const std::uint32_t* keys, std::size_t count, const WalkerPalette& plain, std::vector<glm::vec4>& out) {
+  out.resize(count * kSurfaceMaterialCount);
+  for (std::size_t w = 0; w < count; ++w) {
+    const WalkerPalette p = keys ? walker_palette(keys[w]) : plain;
+    std::copy(p.begin(), p.end(), out.begin() + static_cast<std::ptrdiff_t>(w * kSurfaceMaterialCount));
+  }
 }
 
 }  // namespace strata

@@ -4,7 +4,9 @@
 // its clothes while it changes level of detail or another walker is removed. Linear RGB, one colour per surface
 // class (rig/surface_material.h); alpha is how skin-like the surface's shading is (1 skin, 0 cloth).
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -20,5 +22,9 @@ WalkerPalette walker_palette(std::uint32_t key);
 // The palette every walker gets when the renderer is given no keys: the default skin colour (sRGB, as in
 // RenderOptions) everywhere but the eyes, so a body without clothes looks as it does at low quality, only lit better.
 WalkerPalette plain_palette(const glm::vec3& skin_srgb);
+
+// The palettes of `count` walkers, one after another (kSurfaceMaterialCount colours each), into `out`: by their
+// keys, or all `plain` when there are none. What the body and impostor passes upload per frame.
+void fill_palettes(const std::uint32_t* keys, std::size_t count, const WalkerPalette& plain, std::vector<glm::vec4>& out);
 
 }  // namespace strata

@@ -200,11 +200,7 @@ void BodyPass::prepare_shaded(const BodyDrawInput& b, SlotData& data) {
     data.materials_key = materials_key;
     data.occlusion_key = occlusion_key;
   }
-  palette_scratch_.resize(b.walker_count * kSurfaceMaterialCount);
-  for (std::size_t w = 0; w < b.walker_count; ++w) {
-    const WalkerPalette p = b.walker_keys ? walker_palette(b.walker_keys[w]) : plain_;
-    std::copy(p.begin(), p.end(), palette_scratch_.begin() + static_cast<std::ptrdiff_t>(w * kSurfaceMaterialCount));
-  }
+  fill_palettes(b.walker_keys, b.walker_count, plain_, palette_scratch_);
   glNamedBufferData(palettes_.id(), static_cast<GLsizeiptr>(palette_scratch_.size() * sizeof(glm::vec4)),
                     palette_scratch_.data(), GL_STREAM_DRAW);
   glTextureBuffer(palettes_texture_.id(), GL_RGBA32F, palettes_.id());

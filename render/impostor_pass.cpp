@@ -120,12 +120,7 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
   const glm::vec3 eye(inverse_view[3]);
   if (shading) {
     // Each walker's palette by its key, as the body pass does (render/appearance.h).
-    palette_scratch_.resize(b.walker_count * kSurfaceMaterialCount);
-    const WalkerPalette plain = plain_palette(skin_color);
-    for (std::size_t w = 0; w < b.walker_count; ++w) {
-      const WalkerPalette palette = b.walker_keys ? walker_palette(b.walker_keys[w]) : plain;
-      std::copy(palette.begin(), palette.end(), palette_scratch_.begin() + static_cast<std::ptrdiff_t>(w * kSurfaceMaterialCount));
-    }
+    fill_palettes(b.walker_keys, b.walker_count, plain_palette(skin_color), palette_scratch_);
     glNamedBufferData(palettes_.id(), static_cast<GLsizeiptr>(palette_scratch_.size() * sizeof(glm::vec4)),
                       palette_scratch_.data(), GL_STREAM_DRAW);
     glTextureBuffer(palettes_texture_.id(), GL_RGBA32F, palettes_.id());

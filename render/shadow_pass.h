@@ -4,10 +4,10 @@
 // ground beneath them): an orthographic depth map seen from the sun, which the shaded programs
 // (render/shaders/shading.glsl) sample with a percentage-closer filter.
 //
-// Shadow maps rather than ray-traced shadows (Embree, issue 20's alternative) because the bodies are already
-// streamed to GL every frame: the map costs one more depth-only draw of the same buffers, where a ray tracer
-// needs every walker's skinned mesh in its own acceleration structure, refitted each frame (measured by the issue:
-// 154 ms of refit for 1,000 level-2 walkers, more than the whole shadow pass here).
+// Shadow maps, because they serve every command and the viewer through the one GL renderer, reusing the vertices
+// the colour pass streams anyway. For large headless crowds a ray tracer measured faster (docs/rendering.md: an
+// Embree test traced 100 level-0 walkers with sun shadows in 115 ms where this path takes 1.5 s on llvmpipe); that
+// renderer is not built yet.
 #include <span>
 #include <string_view>
 

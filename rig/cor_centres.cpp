@@ -246,14 +246,9 @@ CorCentres cached_cor_centres(const Mesh& mesh, const SkinBinding& binding, cons
 }
 
 std::shared_ptr<const CorCentres> body_cor_centres(const Body& body, int level) {
-  const BodyLevel* l = nullptr;
-  if (level < 0)
-    l = body.cage ? &*body.cage : nullptr;
-  else if (static_cast<std::size_t>(level) < body.levels.size() && level < 3)
-    l = &body.levels[static_cast<std::size_t>(level)];
+  const BodyLevel* l = body_level_or_cage(body, level);
   if (!l) return nullptr;
-  const std::size_t slot = level < 0 ? 3 : static_cast<std::size_t>(level);
-  return body.cor.get(slot, [&] { return std::make_shared<const CorCentres>(cached_cor_centres(l->mesh, l->binding)); });
+  return body.cor.get(per_level_slot(level), [&] { return std::make_shared<const CorCentres>(cached_cor_centres(l->mesh, l->binding)); });
 }
 
 }  // namespace strata

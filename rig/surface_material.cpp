@@ -58,9 +58,10 @@ SurfaceClasses surface_materials(const Mesh& mesh) {
       if (mesh.part_names[p] == name) return static_cast<int>(p);
     return -1;
   };
-  // A level cut sits at the median height of the triangles that straddle the two parts' boundary.
-  auto boundary_height = [&](int a, int b, double& height) {
-    std::vector<float> ys;
+  // Where parts a and b meet along `normal`: the median of dot(p, normal) over the vertices of the triangles that
+  // straddle their boundary (a level cut sits at the median height of those triangles).
+  auto boundary_along = [&](int a, int b, const glm::dvec3& normal, double& at) {
+    std::vector<double> values;
     for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
       bool has_a = false, has_b = false;
       for (int k = 0; k < 3; ++k) {
@@ -70,13 +71,16 @@ SurfaceClasses surface_materials(const Mesh& mesh) {
       }
       if (!has_a || !has_b) continue;
       for (int k = 0; k < 3; ++k)
-        if (const std::uint32_t v = mesh.triangles[t + static_cast<std::size_t>(k)]; v < n) ys.push_back(mesh.positions[v].y);
+        if (const std::uint32_t v = mesh.triangles[t + static_cast<std::size_t>(k)]; v < n)
+          values.push_back(glm::dot(glm::dvec3(mesh.positions[v]), normal));
     }
-    if (ys.empty()) return false;
-    std::nth_element(ys.begin(), ys.begin() + static_cast<std::ptrdiff_t>(ys.size() / 2), ys.end());
-    height = ys[ys.size() / 2];
+    if (values.empty()) return false;
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
+    at = values[values.size() / 2];
     return true;
   };
+  const glm::dvec3 up(0.0, 1.0, 0.0);
+  auto boundary_height = [&](int a, int b, double& height) { return boundary_along(a, b, up, height); };
   // Only vertices near a cut keep both classes: far from it the pair collapses to the vertex's own side, so a
   // triangle joining a cut part to a part beyond (the shin's ankle cut and the thigh) never blends in a class
   // that belongs to neither. The margin is wider than a triangle of the coarsest level.
@@ -93,7 +97,6 @@ SurfaceClasses surface_materials(const Mesh& mesh) {
       for (int p : parts)
         if (p >= 0 && part_of[v] == p) cut_vertex(v, above, below, glm::dot(glm::dvec3(mesh.positions[v]), normal) - offset);
   };
-  const glm::dvec3 up(0.0, 1.0, 0.0);
   const int hip = part_index("hip"), abdomen = part_index("abdomen");
   double waist = 0.0;
   // The waist cuts every part it could cross: the back of the pelvis and the buttocks rise past it.
@@ -143,26 +146,10 @@ SurfaceClasses surface_materials(const Mesh& mesh) {
       if (glm::length(along) > 1e-6) {
         const glm::dvec3 axis = glm::normalize(along);  // towards the shoulder
         double elbow = 0.0, shoulder = -1e30;
-        std::vector<float> at;
-        for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
-          bool has_u = false, has_f = false;
-          for (int k = 0; k < 3; ++k) {
-            const std::uint32_t v = mesh.triangles[t + static_cast<std::size_t>(k)];
-            has_u |= v < n && part_of[v] == upper;
-            has_f |= v < n && part_of[v] == fore;
-          }
-          if (has_u && has_f)
-            for (int k = 0; k < 3; ++k)
-              if (const std::uint32_t v = mesh.triangles[t + static_cast<std::size_t>(k)]; v < n)
-                at.push_back(static_cast<float>(glm::dot(glm::dvec3(mesh.positions[v]), axis)));
-        }
         for (std::size_t v = 0; v < n; ++v)
           if (part_of[v] == upper) shoulder = std::max(shoulder, glm::dot(glm::dvec3(mesh.positions[v]), axis));
-        if (!at.empty()) {
-          std::nth_element(at.begin(), at.begin() + static_cast<std::ptrdiff_t>(at.size() / 2), at.end());
-          elbow = at[at.size() / 2];
+        if (boundary_along(upper, fore, axis, elbow))
           plane_cut({upper, fore}, axis, elbow + 0.4 * (shoulder - elbow), SurfaceMaterial::Top, SurfaceMaterial::Skin);
-        }
       }
     }
     // Eyes: an iris facing forward (+Z) on a white eyeball; the cut is the distance from the iris' rim.

@@ -197,14 +197,9 @@ VertexOcclusion bake_vertex_occlusion(const Mesh& mesh, const OcclusionOptions& 
 }
 
 std::shared_ptr<const VertexOcclusion> body_vertex_occlusion(const Body& body, int level) {
-  const BodyLevel* l = nullptr;
-  if (level < 0)
-    l = body.cage ? &*body.cage : nullptr;
-  else if (static_cast<std::size_t>(level) < body.levels.size() && level < 3)
-    l = &body.levels[static_cast<std::size_t>(level)];
+  const BodyLevel* l = body_level_or_cage(body, level);
   if (!l) return nullptr;
-  const std::size_t slot = level < 0 ? 3 : static_cast<std::size_t>(level);
-  return body.occlusion.get(slot, [&] { return std::make_shared<const VertexOcclusion>(bake_vertex_occlusion(l->mesh)); });
+  return body.occlusion.get(per_level_slot(level), [&] { return std::make_shared<const VertexOcclusion>(bake_vertex_occlusion(l->mesh)); });
 }
 
 std::vector<float> refined_occlusion(const std::vector<float>& cage_open, const SubdivSurface& surface) {
