@@ -228,13 +228,11 @@ SurfaceClasses refined_materials(const Mesh& cage, const SubdivSurface& surface)
     }
     level = std::move(next);
   }
-  SurfaceClasses out;
-  out.classes.assign(surface.vertex_count, static_cast<std::uint8_t>(SurfaceMaterial::Skin) * 17u);
-  out.cut.assign(surface.vertex_count, 1.0f);
-  for (std::size_t v = 0; v < out.size() && v < surface.opensubdiv_vertex.size(); ++v)
-    if (const std::uint32_t i = surface.opensubdiv_vertex[v]; i < level.size())
-      out.classes[v] = level.classes[i], out.cut[v] = level.cut[i];
-  return out;
+  // The last step's rows are the refined vertices in SubdivSurface numbering already (rig/subdiv_topology.cpp
+  // renumbers them): what the subdivision job writes, and what the triangles index.
+  level.classes.resize(surface.vertex_count, static_cast<std::uint8_t>(SurfaceMaterial::Skin) * 17u);
+  level.cut.resize(surface.vertex_count, 1.0f);
+  return level;
 }
 
 }  // namespace strata

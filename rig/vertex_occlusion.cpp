@@ -216,10 +216,9 @@ std::vector<float> refined_occlusion(const std::vector<float>& cage_open, const 
     }
     level = std::move(next);
   }
-  std::vector<float> out(surface.vertex_count, 1.0f);
-  for (std::size_t v = 0; v < out.size() && v < surface.opensubdiv_vertex.size(); ++v)
-    if (surface.opensubdiv_vertex[v] < level.size()) out[v] = level[surface.opensubdiv_vertex[v]];
-  return out;
+  // The last step's rows are the refined vertices in SubdivSurface numbering already.
+  level.resize(surface.vertex_count, 1.0f);
+  return level;
 }
 
 }  // namespace strata

@@ -5,6 +5,9 @@
 
 #include <array>
 #include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
 
 #include "rig/body_generator.h"
 #include "rig/body_rig.h"
@@ -118,6 +121,28 @@ TEST(SurfaceMaterial, LayoutAndRefinedSurfaceCarryTheClasses) {
   ASSERT_TRUE(surface);
   const SurfaceClasses refined = refined_materials(body->cage->mesh, *surface);
   ASSERT_EQ(refined.size(), surface->vertex_count);
+  // Where each refined vertex lies at rest: the stencils applied to the cage in layout order, as the
+  // subdivision job applies them every frame. Its class must be the one of the cage vertex nearest it, bar a few
+  // along the cuts (a class number read in the wrong vertex order scatters them all over the body).
+  const Mesh& cage = body->cage->mesh;
+  std::vector<glm::vec3> points(surface->cage_layout.vertex_count);
+  for (std::size_t v = 0; v < points.size(); ++v) points[v] = cage.positions[surface->cage_layout.original[v]];
+  for (const SubdivStencils& step : surface->steps) {
+    std::vector<glm::vec3> next(step.rows(), glm::vec3(0.0f));
+    for (std::size_t r = 0; r < step.rows(); ++r)
+      for (std::uint32_t t = step.offsets[r]; t < step.offsets[r + 1]; ++t) next[r] += step.weights[t] * points[step.indices[t]];
+    points = std::move(next);
+  }
+  ASSERT_EQ(points.size(), refined.size());
+  const SurfaceClasses cage_classes = surface_materials(cage);
+  std::size_t agree = 0;
+  for (std::size_t v = 0; v < points.size(); ++v) {
+    std::size_t nearest = 0;
+    for (std::size_t c = 1; c < cage.vertex_count(); ++c)
+      if (glm::distance(points[v], cage.positions[c]) < glm::distance(points[v], cage.positions[nearest])) nearest = c;
+    agree += refined.at(v) == cage_classes.at(nearest);
+  }
+  EXPECT_GT(agree, points.size() * 9 / 10);
   std::array<std::size_t, kSurfaceMaterialCount> count{};
   for (std::size_t v = 0; v < refined.size(); ++v) ++count[static_cast<std::size_t>(refined.at(v))];
   for (SurfaceMaterial m : {SurfaceMaterial::Skin, SurfaceMaterial::Top, SurfaceMaterial::Bottom, SurfaceMaterial::Shoes,
