@@ -1,6 +1,6 @@
 #pragma once
 // Per-walker variety for --quality high: each walker's skin tone, hair, top, trousers and shoes, drawn from
-// palettes of plausible colours by a hash of a key that stays with the walker (its entity slot), so a walker keeps
+// palettes of plausible colours by a key that stays with the walker (its entity slot), so a walker keeps
 // its clothes while it changes level of detail or another walker is removed. Linear RGB, one colour per surface
 // class (rig/surface_material.h); alpha is how skin-like the surface's shading is (1 skin, 0 cloth).
 #include <array>

@@ -142,7 +142,11 @@ VertexOcclusion bake_vertex_occlusion(const Mesh& mesh, const OcclusionOptions& 
   const std::vector<glm::vec3>* normals = &mesh.normals;
   if (mesh.normals.size() != n) {
     with_normals.positions = mesh.positions;
-    with_normals.triangles = mesh.triangles;
+    // Only whole triangles with indices in range (compute_normals trusts its input).
+    for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3)
+      if (mesh.triangles[t] < n && mesh.triangles[t + 1] < n && mesh.triangles[t + 2] < n)
+        with_normals.triangles.insert(with_normals.triangles.end(), mesh.triangles.begin() + static_cast<std::ptrdiff_t>(t),
+                                      mesh.triangles.begin() + static_cast<std::ptrdiff_t>(t + 3));
     compute_normals(with_normals);
     normals = &with_normals.normals;
   }

@@ -2,6 +2,7 @@
 // linear values with the right material response, and a crowd's keys spread over the palettes.
 #include <gtest/gtest.h>
 
+#include <map>
 #include <set>
 #include <tuple>
 
@@ -47,6 +48,17 @@ TEST(Appearance, ACrowdIsDressedInManyColours) {
   EXPECT_GE(bottoms.size(), 6u);
   EXPECT_GE(hair.size(), 7u);
   EXPECT_LT(same_as_next, 10u);
+}
+
+// Walkers spawned together get consecutive keys and stand side by side: neighbours never share a shirt, and in any
+// twelve consecutive keys no shirt appears more than twice.
+TEST(Appearance, NeighbouringKeysWearDifferentShirts) {
+  for (std::uint32_t start = 0; start < 1000; ++start) {
+    ASSERT_NE(of(walker_palette(start), SurfaceMaterial::Top), of(walker_palette(start + 1), SurfaceMaterial::Top)) << start;
+    std::map<std::tuple<float, float, float>, int> count;
+    for (std::uint32_t k = start; k < start + 12; ++k) ++count[rgb(of(walker_palette(k), SurfaceMaterial::Top))];
+    for (const auto& [colour, n] : count) ASSERT_LE(n, 2) << "keys " << start << ".." << start + 11;
+  }
 }
 
 TEST(Appearance, ThePlainPaletteIsTheSkinColourButForTheEyes) {
