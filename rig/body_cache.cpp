@@ -4,6 +4,7 @@
 #include "io/mesh_check.h"
 #include "io/atomic_file.h"
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -101,6 +102,48 @@ std::optional<std::filesystem::path> body_cache_directory() {
   if (const char* home = std::getenv("HOME"); home && *home)
     return std::filesystem::path(home) / ".cache" / "strata";
   return std::nullopt;
+}
+
+std::optional<std::vector<float>> load_float_cache(const std::filesystem::path& file, const char (&magic)[8],
+                                                   std::uint64_t key, std::size_t floats_per_item,
+                                                   std::uint64_t max_items) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return std::nullopt;
+  char stored_magic[8];
+  std::uint64_t stored_key = 0, count = 0;
+  if (!in.read(stored_magic, sizeof stored_magic) || std::memcmp(stored_magic, magic, sizeof stored_magic) != 0)
+    return std::nullopt;
+  if (!in.read(reinterpret_cast<char*>(&stored_key), sizeof stored_key) || stored_key != key) return std::nullopt;
+  if (!in.read(reinterpret_cast<char*>(&count), sizeof count) || count > max_items) return std::nullopt;
+  std::vector<float> values(static_cast<std::size_t>(count) * floats_per_item);
+  if (!in.read(reinterpret_cast<char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float))))
+    return std::nullopt;
+  for (float v : values)
+    if (!std::isfinite(v)) return std::nullopt;
+  return values;
+}
+
+void save_float_cache(const std::filesystem::path& file, const char (&magic)[8], std::uint64_t key,
+                      std::size_t floats_per_item, std::span<const float> values) {
+  std::error_code ec;
+  std::filesystem::create_directories(file.parent_path(), ec);
+  if (ec || floats_per_item == 0) return;
+  AtomicFile atomic(file);
+  {
+    std::ofstream out(atomic.temp_path(), std::ios::binary | std::ios::trunc);
+    if (!out) return;
+    const std::uint64_t count = values.size() / floats_per_item;
+    out.write(magic, sizeof magic);
+    out.write(reinterpret_cast<const char*>(&key), sizeof key);
+    out.write(reinterpret_cast<const char*>(&count), sizeof count);
+    out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(count * floats_per_item * sizeof(float)));
+    out.close();
+    if (!out) return;
+  }
+  try {
+    atomic.commit();
+  } catch (const std::exception&) {
+  }
 }
 
 std::optional<BodyLevels> load_body_cache(const std::filesystem::path& file, std::uint64_t key) {

@@ -186,41 +186,17 @@ std::uint64_t cor_cache_key(const Mesh& mesh, const SkinBinding& binding, const 
 }
 
 std::optional<std::vector<glm::vec3>> load_cor_cache(const std::filesystem::path& file, std::uint64_t key) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return std::nullopt;
-  char magic[8];
-  std::uint64_t stored = 0, count = 0;
-  if (!in.read(magic, sizeof magic) || !std::equal(magic, magic + 8, kMagic)) return std::nullopt;
-  if (!in.read(reinterpret_cast<char*>(&stored), sizeof stored) || stored != key) return std::nullopt;
-  if (!in.read(reinterpret_cast<char*>(&count), sizeof count) || count > kMaxCentres) return std::nullopt;
-  std::vector<glm::vec3> c(count);
-  if (!in.read(reinterpret_cast<char*>(c.data()), static_cast<std::streamsize>(count * sizeof(glm::vec3))))
-    return std::nullopt;
-  for (const glm::vec3& p : c)
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return std::nullopt;
+  const std::optional<std::vector<float>> f = load_float_cache(file, kMagic, key, 3, kMaxCentres);
+  if (!f) return std::nullopt;
+  std::vector<glm::vec3> c(f->size() / 3);
+  for (std::size_t i = 0; i < c.size(); ++i) c[i] = {(*f)[3 * i], (*f)[3 * i + 1], (*f)[3 * i + 2]};
   return c;
 }
 
 void save_cor_cache(const std::filesystem::path& file, std::uint64_t key, const std::vector<glm::vec3>& centres) {
-  std::error_code ec;
-  std::filesystem::create_directories(file.parent_path(), ec);
-  if (ec) return;
-  AtomicFile atomic(file);
-  {
-    std::ofstream out(atomic.temp_path(), std::ios::binary | std::ios::trunc);
-    if (!out) return;
-    const std::uint64_t count = centres.size();
-    out.write(kMagic, sizeof kMagic);
-    out.write(reinterpret_cast<const char*>(&key), sizeof key);
-    out.write(reinterpret_cast<const char*>(&count), sizeof count);
-    out.write(reinterpret_cast<const char*>(centres.data()), static_cast<std::streamsize>(count * sizeof(glm::vec3)));
-    out.close();
-    if (!out) return;
-  }
-  try {
-    atomic.commit();
-  } catch (const std::exception&) {
-  }
+  std::vector<float> f(3 * centres.size());
+  for (std::size_t i = 0; i < centres.size(); ++i) f[3 * i] = centres[i].x, f[3 * i + 1] = centres[i].y, f[3 * i + 2] = centres[i].z;
+  save_float_cache(file, kMagic, key, 3, f);
 }
 
 CorCentres cached_cor_centres(const Mesh& mesh, const SkinBinding& binding, const CorOptions& options) {

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -12,6 +15,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "components/fnv_hasher.h"
+#include "rig/body_cache.h"
 #include "rig/subdiv_topology.h"
 
 namespace strata {
@@ -200,10 +205,46 @@ VertexOcclusion bake_vertex_occlusion(const Mesh& mesh, const OcclusionOptions& 
   return out;
 }
 
+namespace {
+
+constexpr char kOcclusionMagic[8] = {'S', 'T', 'R', 'A', 'O', 'C', '0', '1'};
+constexpr std::uint32_t kOcclusionVersion = 1;  // bump when the bake changes its result
+
+std::uint64_t occlusion_cache_key(const Mesh& mesh, const OcclusionOptions& options) {
+  FnvHasher h;
+  h.value(kOcclusionVersion);
+  h.vector(mesh.positions);
+  h.vector(mesh.normals);
+  h.vector(mesh.triangles);
+  h.value(options.rays);
+  h.value(options.range);
+  return h.h;
+}
+
+}  // namespace
+
+VertexOcclusion cached_vertex_occlusion(const Mesh& mesh, const OcclusionOptions& options) {
+  const std::uint64_t key = occlusion_cache_key(mesh, options);
+  const std::optional<std::filesystem::path> dir = body_cache_directory();
+  char name[48];
+  std::snprintf(name, sizeof name, "occlusion-%016llx.bin", static_cast<unsigned long long>(key));
+  if (dir)
+    if (std::optional<std::vector<float>> open = load_float_cache(*dir / name, kOcclusionMagic, key, 1, 1u << 26);
+        open && open->size() == mesh.vertex_count()) {
+      VertexOcclusion out;
+      out.open = std::move(*open);
+      out.from_cache = true;
+      return out;
+    }
+  VertexOcclusion out = bake_vertex_occlusion(mesh, options);
+  if (dir) save_float_cache(*dir / name, kOcclusionMagic, key, 1, out.open);
+  return out;
+}
+
 std::shared_ptr<const VertexOcclusion> body_vertex_occlusion(const Body& body, int level) {
   const BodyLevel* l = body_level_or_cage(body, level);
   if (!l) return nullptr;
-  return body.occlusion.get(per_level_slot(level), [&] { return std::make_shared<const VertexOcclusion>(bake_vertex_occlusion(l->mesh)); });
+  return body.occlusion.get(per_level_slot(level), [&] { return std::make_shared<const VertexOcclusion>(cached_vertex_occlusion(l->mesh)); });
 }
 
 std::vector<float> refined_occlusion(const std::vector<float>& cage_open, const SubdivSurface& surface) {

@@ -26,13 +26,19 @@ struct OcclusionOptions {
 
 struct VertexOcclusion {
   std::vector<float> open;  // per mesh vertex, in [0, 1]: 1 sees the whole hemisphere, 0 none of it
-  double seconds = 0.0;     // the bake's wall time
+  double seconds = 0.0;     // the bake's wall time (0 when loaded from the disk cache)
+  bool from_cache = false;
 };
 
 // Bakes `mesh` (rest positions; normals computed from the triangles when the mesh has none). Degenerate
 // triangles are skipped; a vertex with a zero normal is left open (1). Parallel, deterministic for any thread count.
 VertexOcclusion bake_vertex_occlusion(const Mesh& mesh, const OcclusionOptions& options = {});
-// Level `level` (0..2; -1 the cage) of `body`, baked on first use and then kept in the body (Body::occlusion).
+// The same, cached on disk beside the body cache (rig/body_cache.h body_cache_directory), keyed by a hash of the
+// mesh and the options: every process after the first loads it (level 0 bakes in under half a second optimised,
+// many times that in a sanitizer build, where every test that draws at high quality paid it).
+VertexOcclusion cached_vertex_occlusion(const Mesh& mesh, const OcclusionOptions& options = {});
+// Level `level` (0..2; -1 the cage) of `body`, from cached_vertex_occlusion on first use and then kept in the body
+// (Body::occlusion).
 // nullptr when the body has no such level.
 std::shared_ptr<const VertexOcclusion> body_vertex_occlusion(const Body& body, int level);
 

@@ -6,7 +6,9 @@
 //
 //   const strata::test::TempDir tmp("strata_cli_test");
 //   run("crowd --out " + (tmp / "crowd").string());
-#include <stdlib.h>  // mkdtemp
+#include <stdlib.h>  // mkdtemp, setenv, unsetenv
+
+#include <cstdlib>
 
 #include <cerrno>
 #include <filesystem>
@@ -35,6 +37,30 @@ class TempDir {
 
  private:
   std::filesystem::path path_;
+};
+
+// Points the body cache (rig/body_cache.h body_cache_directory) at `dir` for the object's life, with the cache on
+// whatever STRATA_NO_BODY_CACHE said; both variables are restored afterwards.
+class ScopedBodyCacheDir {
+ public:
+  explicit ScopedBodyCacheDir(const std::filesystem::path& dir) {
+    const char* xdg = std::getenv("XDG_CACHE_HOME");
+    const char* off = std::getenv("STRATA_NO_BODY_CACHE");
+    had_xdg_ = xdg != nullptr, had_off_ = off != nullptr;
+    xdg_ = xdg ? xdg : "", off_ = off ? off : "";
+    ::setenv("XDG_CACHE_HOME", dir.c_str(), 1);
+    ::unsetenv("STRATA_NO_BODY_CACHE");
+  }
+  ~ScopedBodyCacheDir() {
+    if (had_xdg_) ::setenv("XDG_CACHE_HOME", xdg_.c_str(), 1); else ::unsetenv("XDG_CACHE_HOME");
+    if (had_off_) ::setenv("STRATA_NO_BODY_CACHE", off_.c_str(), 1);
+  }
+  ScopedBodyCacheDir(const ScopedBodyCacheDir&) = delete;
+  ScopedBodyCacheDir& operator=(const ScopedBodyCacheDir&) = delete;
+
+ private:
+  bool had_xdg_ = false, had_off_ = false;
+  std::string xdg_, off_;
 };
 
 }  // namespace strata::test

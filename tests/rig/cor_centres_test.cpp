@@ -74,12 +74,7 @@ TEST(CorCentres, SameBytesForOneAndTwoThreads) {
 
 TEST(CorCentres, DiskCacheKeyedByTheBindingAndRefusingDamagedFiles) {
   const test::TempDir tmp("strata_cor_cache");
-  const char* old_xdg = std::getenv("XDG_CACHE_HOME");
-  const std::string saved = old_xdg ? old_xdg : "";
-  ::setenv("XDG_CACHE_HOME", tmp.path().c_str(), 1);
-  const char* old_off = std::getenv("STRATA_NO_BODY_CACHE");
-  const std::string saved_off = old_off ? old_off : "";
-  ::unsetenv("STRATA_NO_BODY_CACHE");
+  const test::ScopedBodyCacheDir cache(tmp.path());
 
   BodyLevel b = tube();
   const CorCentres first = cached_cor_centres(b.mesh, b.binding);
@@ -107,8 +102,6 @@ TEST(CorCentres, DiskCacheKeyedByTheBindingAndRefusingDamagedFiles) {
   EXPECT_FALSE(load_cor_cache(file, key + 1).has_value());
   EXPECT_FALSE(cached_cor_centres(b.mesh, b.binding).from_cache);
 
-  if (old_xdg) ::setenv("XDG_CACHE_HOME", saved.c_str(), 1); else ::unsetenv("XDG_CACHE_HOME");
-  if (old_off) ::setenv("STRATA_NO_BODY_CACHE", saved_off.c_str(), 1);
 }
 
 }  // namespace

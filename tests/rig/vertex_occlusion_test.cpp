@@ -4,12 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <limits>
+#include <string>
 
 #include <tbb/global_control.h>
 
 #include "rig/body_generator.h"
 #include "rig/vertex_occlusion.h"
+#include "tests/temp_dir.h"
 
 namespace strata {
 namespace {
@@ -103,6 +107,31 @@ TEST(VertexOcclusion, TheDefaultBodyIsDarkerWhereItFolds) {
   EXPECT_GT(o.open[top], 0.9f);
   EXPECT_LT(fold, 0.6f);
   EXPECT_GT(o.seconds, 0.0);
+}
+
+// The disk cache: the second request loads the first one's bake; a changed mesh is another key; a damaged file
+// is baked again.
+TEST(VertexOcclusion, CachedOnDiskBesideTheBody) {
+  const test::TempDir tmp("strata_occlusion_cache");
+  const test::ScopedBodyCacheDir cache(tmp.path());
+
+  Mesh corner;
+  add_grid(corner, {-0.5f, 0.0f, 0.5f}, {1.0f, 0.0f, 0.0f}, {0.0f, 0.0f, -0.5f}, 8);
+  add_grid(corner, {-0.5f, 0.0f, 0.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 0.5f, 0.0f}, 8);
+  const VertexOcclusion first = cached_vertex_occlusion(corner);
+  EXPECT_FALSE(first.from_cache);
+  const VertexOcclusion second = cached_vertex_occlusion(corner);
+  EXPECT_TRUE(second.from_cache);
+  EXPECT_EQ(second.open, first.open);
+  Mesh moved = corner;
+  moved.positions[0].y += 0.01f;
+  EXPECT_FALSE(cached_vertex_occlusion(moved).from_cache);
+  for (const auto& e : std::filesystem::directory_iterator(tmp.path() / "strata"))
+    if (e.path().filename().string().rfind("occlusion-", 0) == 0) std::filesystem::resize_file(e.path(), 20);
+  const VertexOcclusion again = cached_vertex_occlusion(corner);
+  EXPECT_FALSE(again.from_cache);
+  EXPECT_EQ(again.open, first.open);
+
 }
 
 }  // namespace
