@@ -1,9 +1,9 @@
 #include "render/appearance.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
-#include <iterator>
 
 namespace strata {
 namespace {
@@ -39,11 +39,6 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-template <std::size_t N>
-const Srgb& pick(const Srgb (&table)[N], std::uint64_t bits) {
-  return table[bits % N];
-}
-
 // Entry of a table of `n` by a Weyl sequence: frac(key * step) for an irrational step. Keys handed out one after
 // another (entity slots of a crowd spawned together, standing side by side) land far apart in the table and use
 // it evenly; hashing alone dressed five walkers in a row in the same green shirt (keys 2..6).
@@ -52,21 +47,37 @@ std::size_t spread(std::uint32_t key, double step, std::size_t n) {
   return static_cast<std::size_t>((f - std::floor(f)) * static_cast<double>(n)) % n;
 }
 
+// A table made linear once: walker_palette runs per walker per frame (every impostor of a crowd), and the sRGB
+// curve's pow() for its 21 channels cost more than the rest of it.
+template <std::size_t N>
+std::array<glm::vec3, N> linear_table(const Srgb (&table)[N]) {
+  std::array<glm::vec3, N> out;
+  for (std::size_t i = 0; i < N; ++i) out[i] = glm::vec3(linear(table[i], 0.0f));
+  return out;
+}
+
 }  // namespace
 
 WalkerPalette walker_palette(std::uint32_t key) {
+  static const auto skin = linear_table(kSkin);
+  static const auto top = linear_table(kTop);
+  static const auto bottom = linear_table(kBottom);
+  static const auto shoes = linear_table(kShoes);
+  static const auto hair = linear_table(kHair);
+  static const auto iris = linear_table(kIris);
+  static const glm::vec3 sclera(linear(kSclera, 0.0f));
   const std::uint64_t h = mix(key), g = mix(h);
   WalkerPalette p;
   // The two largest areas, skin and shirt, by Weyl sequences with different steps (sqrt 3 - 1, sqrt 2 - 1), so
   // neighbours differ in both; the rest by the hash.
-  p[static_cast<std::size_t>(SurfaceMaterial::Skin)] = linear(kSkin[spread(key, 0.7320508075688772, std::size(kSkin))], 1.0f);
-  p[static_cast<std::size_t>(SurfaceMaterial::Top)] = linear(kTop[spread(key, 0.4142135623730951, std::size(kTop))], 0.0f);
-  p[static_cast<std::size_t>(SurfaceMaterial::Bottom)] = linear(pick(kBottom, h >> 32), 0.0f);
-  p[static_cast<std::size_t>(SurfaceMaterial::Shoes)] = linear(pick(kShoes, h >> 48), 0.0f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Skin)] = glm::vec4(skin[spread(key, 0.7320508075688772, skin.size())], 1.0f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Top)] = glm::vec4(top[spread(key, 0.4142135623730951, top.size())], 0.0f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Bottom)] = glm::vec4(bottom[(h >> 32) % bottom.size()], 0.0f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Shoes)] = glm::vec4(shoes[(h >> 48) % shoes.size()], 0.0f);
   // Hair is drawn apart from skin: dark skin with light hair is rarer than the reverse but happens.
-  p[static_cast<std::size_t>(SurfaceMaterial::Hair)] = linear(pick(kHair, g), 0.15f);
-  p[static_cast<std::size_t>(SurfaceMaterial::Eyes)] = linear(pick(kIris, g >> 20), 0.3f);
-  p[static_cast<std::size_t>(SurfaceMaterial::Sclera)] = linear(kSclera, 0.3f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Hair)] = glm::vec4(hair[g % hair.size()], 0.15f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Eyes)] = glm::vec4(iris[(g >> 20) % iris.size()], 0.3f);
+  p[static_cast<std::size_t>(SurfaceMaterial::Sclera)] = glm::vec4(sclera, 0.3f);
   return p;
 }
 
