@@ -30,10 +30,25 @@ float smoothstep01(float x) {
   return x * x * (3.0f - 2.0f * x);
 }
 
-// The swing's distance curve: a triangular velocity profile (rest, peak at mid-swing, rest), integrated.
-float swing_ease(float sigma, float peak) {
-  sigma = std::clamp(sigma, 0.0f, 1.0f);
-  return sigma < peak ? sigma * sigma / peak : 1.0f - (1.0f - sigma) * (1.0f - sigma) / (1.0f - peak);
+// A swing foot holds the pelvis down by its reach as it leaves the ground (before kSwingFreeFrom of its swing: the
+// trailing leg's limit goes on smoothly past toe-off, which a cadence change moves) and as it comes in to land
+// (from kSwingBindsFrom); in between the pelvis ignores it and the foot is drawn in to the leg's reach instead.
+constexpr float kSwingFreeFrom = 0.2f;
+constexpr float kSwingBindsFrom = 0.85f;
+
+// A uniform Cardinal spline (tension 0, Catmull-Rom) through n evenly spaced values at sigma in [0, 1]; the end
+// values are repeated as the outer control points.
+template <typename T>
+T cardinal_at(const T* v, std::size_t n, float sigma) {
+  const float x = std::clamp(sigma, 0.0f, 1.0f) * static_cast<float>(n - 1);
+  const std::size_t i = std::min(static_cast<std::size_t>(x), n - 2);
+  const float t = x - static_cast<float>(i), t2 = t * t, t3 = t2 * t;
+  const T& p0 = v[i == 0 ? 0 : i - 1];
+  const T& p1 = v[i];
+  const T& p2 = v[i + 1];
+  const T& p3 = v[std::min(i + 2, n - 1)];
+  return 0.5f * ((2.0f * p1) + (p2 - p0) * t + (2.0f * p0 - 5.0f * p1 + 4.0f * p2 - p3) * t2 +
+                 (3.0f * p1 - p0 - 3.0f * p2 + p3) * t3);
 }
 
 // Polynomial smooth minimum: never above min(a, b), equal to it when |a - b| >= k.
@@ -132,6 +147,17 @@ Pose2 landing_footprint(const LocomotionRig& rig, const GroundTrack& track, floa
   return footprint(rig, p, leg, scale);
 }
 
+// The foot's pitch in the heel rise, from heel_off to toe-off (fraction of stance tau): a cubic from rest to
+// toe_off_pitch, still rising at toe-off at heel_rise_end_slope times its mean rate.
+// Measured (issue 21): a later, steeper rise (x^2 or x^3, as the normative foot turns) with the subject's ~40 deg
+// at toe-off brought the ankle's RMS to 7-8 deg, but the trailing leg then reached its foot only with the pelvis
+// 7-9 cm down in double support (heel-strike knee 30 deg): the default skeleton's ankle sits 10 cm behind its
+// knee line, so its straight leg is shorter than the subject's.
+float heel_rise_pitch(float tau, const GaitStyle& style) {
+  const float x = std::clamp((tau - style.heel_off) / (1.0f - style.heel_off), 0.0f, 1.0f);
+  return style.toe_off_pitch * (x * x * (3.0f - 2.0f * x) + style.heel_rise_end_slope * x * x * (x - 1.0f));
+}
+
 struct AnklePose {
   glm::vec3 position;
   glm::quat orientation;  // the foot's frame in world axes
@@ -152,7 +178,7 @@ AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
     const glm::quat q = h * pitch(p);
     return {heel + q * ((rig.ankle_rest[leg] - rig.heel_rest[leg]) * scale), q};
   }
-  const float p = style.toe_off_pitch * smoothstep01((tau - style.heel_off) / (1.0f - style.heel_off));
+  const float p = heel_rise_pitch(tau, style);
   if (foot_pitch) *foot_pitch = p;
   glm::vec3 ball = plant + h * ((rig.ball_rest[leg] - rig.ankle_rest[leg]) * scale);
   const float over = p - rig.toe_limit;
@@ -260,17 +286,22 @@ PelvisMotion pelvis_motion(const GaitStyle& style, float phase, float walking = 
   return m;
 }
 
+// A hip's position (humanoid units) for root translation (sway, 0, 0): rt + c_sacro + R_sacro (c_hip - c_sacro).
+glm::vec3 hip_position(const LocomotionRig& rig, const PelvisMotion& motion, int leg) {
+  return glm::vec3(motion.sway, 0.0f, 0.0f) + rig.sacro_center + motion.sacro * (rig.hip_rest[leg] - rig.sacro_center);
+}
+
 // The highest root translation y (humanoid units) at which both hips still reach their ankles (world positions),
 // for a pelvis placed by `frame` and moving as `motion`. smooth > 0 blends the two legs' limits (continuous
 // output for the per-frame value); 0 takes the plain minimum.
+// A leg whose `binds` is false (a swing foot far from landing) is left out.
 float reach_limit(const LocomotionRig& rig, const WalkerFrame& frame, const PelvisMotion& motion,
-                  const glm::vec3 ankle_world[2], float start, float smooth) {
+                  const glm::vec3 ankle_world[2], float start, float smooth, const bool binds[2]) {
   float dy = start;
   for (int leg = 0; leg < 2; ++leg) {
+    if (!binds[leg]) continue;
     const glm::vec3 a = frame.to_humanoid(ankle_world[leg]);
-    // Hip position for root translation (sway, 0, 0): rt + c_sacro + R_sacro (c_hip - c_sacro).
-    const glm::vec3 hip = glm::vec3(motion.sway, 0.0f, 0.0f) + rig.sacro_center +
-                          motion.sacro * (rig.hip_rest[leg] - rig.sacro_center);
+    const glm::vec3 hip = hip_position(rig, motion, leg);
     const float reach = 0.998f * rig.leg_reach[leg];
     const float dx = hip.x - a.x, dz = hip.z - a.z;
     const float limit = a.y + std::sqrt(std::max(reach * reach - dx * dx - dz * dz, 0.0f)) - hip.y;
@@ -410,14 +441,13 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   // An agent stepping slower than its cadence's speed rolls off its toes less: a full 63-degree toe-off under a
   // body that hardly moves forward asks the ankle for more plantarflexion than it has, and IK's clamp then pivots
   // the foot on the ground (measured: 5 cm of toe-tip slide while stopping).
-  GaitStyle agent_style;
-  const GaitStyle* chosen = &base_style;
-  if (source.agents() && clock.track.speed_ratio < 1.0f) {
-    agent_style = base_style;
-    agent_style.toe_off_pitch *= std::max(clock.track.speed_ratio, 0.3f);
-    chosen = &agent_style;
-  }
-  const GaitStyle& style = *chosen;
+  GaitStyle walk_style = base_style;
+  if (source.agents() && clock.track.speed_ratio < 1.0f)
+    walk_style.toe_off_pitch *= std::max(clock.track.speed_ratio, 0.3f);
+  walk_style.pelvis_anterior_tilt +=
+      base_style.pelvis_tilt_per_cadence * std::max(clock.gp.cadence - base_style.pelvis_tilt_from_cadence, 0.0f);
+  walk_style.heel_rise_end_slope *= smoothstep01((clock.gp.cadence - 90.0f) / 20.0f);
+  const GaitStyle& style = walk_style;
   const GaitParameters& gp = clock.gp;
   const GroundTrack& track = clock.track;
   const float phase = g[kGaitPhase];
@@ -497,7 +527,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // The foot may pivot only while one point carries it: the heel before foot flat, the toe tip once the toes
       // bend no further. Flat, or rolling over the ball with the toes down, it holds (both ball and tip would move).
       const float roll = tau >= style.heel_off
-                             ? style.toe_off_pitch * smoothstep01((tau - style.heel_off) / (1.0f - style.heel_off))
+                             ? heel_rise_pitch(tau, style)
                              : 0.0f;
       const bool on_heel = tau < style.heel_rocker, on_tip = roll > rig.toe_limit;
       const float heading = g.leg(leg, kLegPlantHeading);
@@ -520,20 +550,71 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
   // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
   // swinging leg lands on its target. Arcs are built once per frame.
+  // The swing ankle: a Cardinal spline in time through knots placed by the normative swing's joint angles on
+  // this walker's legs (kSwingHipDeg...). Along the step each knot sits where the ankle is, relative to a hip
+  // moving on at walking pace, as a fraction of the way from toe-off to heel strike; upwards, at the height the
+  // leg's angles lift it above that line. The foot's pitch is the normative shin angle less the ankle's
+  // dorsiflexion, eased from the toe-off pitch over the first 20 % (over 40 %, the ankle stayed 5 deg more
+  // plantarflexed through early swing) and into the heel-strike pitch over the last 40 %, so both ends join the
+  // stance rockers exactly. It lands on the heel-strike pose (toes up), not on the flat
+  // footprint.
   struct Swing {
-    SmallCardinalPath arc;
-    glm::quat from, to;
+    glm::vec4 knots[kSwingKnots];  // ankle position (world) and foot pitch (rad, toes down) at each knot
+    glm::quat from_yaw, to_yaw;
+    AnklePose at(float sigma) const {
+      const glm::vec4 k = cardinal_at(knots, kSwingKnots, sigma);
+      const glm::quat heading = glm::slerp(from_yaw, to_yaw, smoothstep01((sigma - 0.25f) / 0.6f));
+      return {glm::vec3(k), heading * pitch(k.w)};
+    }
   };
   auto make_swing = [&](int leg, const glm::vec3& from, float from_heading, float from_pitch, const glm::vec3& to,
                         float to_heading) {
-    // The double interpolant: a Cardinal arc through a high early-swing knot (the heel lifted behind: the knee
-    // folds) and a raised mid-swing one (ground clearance), walked by an eased distance curve. It lands on the
-    // heel-strike pose (toes up), not on the flat footprint.
     const AnklePose strike = stance_pose(rig, leg, to, to_heading, 0.0f, scale, style, nullptr, strike_pitch);
-    const glm::vec3 knots[4] = {from, glm::mix(from, strike.position, style.swing_lift_at) + kUp * (style.swing_lift * scale),
-                                glm::mix(from, strike.position, 0.6f) + kUp * (style.swing_clearance * scale),
-                                strike.position};
-    return Swing{SmallCardinalPath(knots, 0.0f), yaw(from_heading) * pitch(from_pitch), strike.orientation};
+    const glm::vec3 chord = strike.position - from;
+    float forward[kSwingKnots], up[kSwingKnots], shin_pitch[kSwingKnots];
+    for (std::size_t k = 0; k < kSwingKnots; ++k) {
+      // Hip flexion is measured against the pelvis, which tilts forward: the thigh's own angle is less by the tilt.
+      const float thigh = glm::radians(kSwingHipDeg[k]) - style.pelvis_anterior_tilt;
+      const float knee = glm::radians(kSwingKneeDeg[k]);
+      const glm::vec3 rel = pitch(-thigh) * (rig.thigh_rest[leg] + pitch(knee) * rig.shin_rest[leg]) * scale;
+      forward[k] = rel.z, up[k] = rel.y;
+      shin_pitch[k] = knee - thigh - glm::radians(kSwingAnkleDeg[k]);
+    }
+    // The hip covers the rest of the step: a short or stopping step keeps the legs' own motion.
+    const float step = std::sqrt(chord.x * chord.x + chord.z * chord.z);
+    const float hip_travel = std::max(step - (forward[kSwingKnots - 1] - forward[0]), 0.0f);
+    const float along_last = hip_travel + forward[kSwingKnots - 1] - forward[0];
+    const float pitch_from = from_pitch - shin_pitch[0];
+    const float pitch_to = -strike_pitch - shin_pitch[kSwingKnots - 1];
+    // The sole's ground level at both ends: under the toe tip at toe-off, under the landing footprint.
+    const glm::vec3 tip_offset = (rig.tip_rest[leg] - rig.ankle_rest[leg]) * scale;
+    const glm::vec3 heel_offset = (rig.heel_rest[leg] - rig.ankle_rest[leg]) * scale;
+    const float ground_from = (from + yaw(from_heading) * pitch(from_pitch) * tip_offset).y;
+    const float ground_to = to.y + tip_offset.y;
+    Swing s;
+    for (std::size_t k = 0; k < kSwingKnots; ++k) {
+      const float sigma = static_cast<float>(k) / static_cast<float>(kSwingKnots - 1);
+      const float f = along_last > 1e-4f ? (hip_travel * sigma + forward[k] - forward[0]) / along_last : sigma;
+      const float lift = up[k] - glm::mix(up[0], up[kSwingKnots - 1], f);
+      const float p = shin_pitch[k] + pitch_from * (1.0f - smoothstep01(sigma / 0.2f)) +
+                      pitch_to * smoothstep01((sigma - 0.6f) / 0.4f);
+      glm::vec3 ankle = from + chord * f + kUp * lift;
+      if (sigma > 0.2f && sigma < 0.8f) {
+        // Clearance: the leg's angles are a person's, its lengths and the pelvis height are this walker's, so a
+        // toe or heel may come out lower than the subject's 1-2 cm; such a knot in the middle of the swing is
+        // raised until both clear the ground by swing_clearance. Guarding the knots at 12.5 and 87.5 % too
+        // lifted the landing heel and left the knee 20 deg bent at 96 % of the cycle (subject: 3).
+        const glm::quat q = glm::slerp(yaw(from_heading), yaw(to_heading), f) * pitch(p);
+        const float sole = std::min((ankle + q * tip_offset).y, (ankle + q * heel_offset).y);
+        ankle.y += std::max(glm::mix(ground_from, ground_to, f) + style.swing_clearance * scale - sole, 0.0f);
+      }
+      s.knots[k] = glm::vec4(ankle, p);
+    }
+    s.knots[0] = glm::vec4(from, from_pitch);
+    s.knots[kSwingKnots - 1] = glm::vec4(strike.position, -strike_pitch);
+    s.from_yaw = yaw(from_heading);
+    s.to_yaw = yaw(to_heading);
+    return s;
   };
   struct LegPath {
     bool swinging;
@@ -562,22 +643,24 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     }
   }
   // `ahead` in seconds, at most ~0.3 cycle so a leg changes mode at most once.
-  auto ankle_at = [&](int leg, float ahead, float* foot_pitch) -> AnklePose {
+  // `binds` (optional): whether the leg's reach holds the pelvis down, false for a swing foot before
+  // kSwingBindsFrom of its swing.
+  auto ankle_at = [&](int leg, float ahead, float* foot_pitch, bool* binds = nullptr) -> AnklePose {
     const LegPath& lp = legs[leg];
     const float psi = lp.psi + ahead / gp.cycle_time;  // not wrapped: > 1 means past the next heel strike
     if (foot_pitch) *foot_pitch = 0.0f;
     const bool in_swing = lp.swinging ? psi < 1.0f : psi >= sf;
+    if (binds) *binds = true;
     if (!in_swing) {
       const float tau = std::min((lp.swinging ? psi - 1.0f : psi) / sf, 1.0f);
       return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch, strike_pitch);
     }
     const float sigma = sf < 1.0f ? std::clamp((psi - sf) / (1.0f - sf), 0.0f, 1.0f) : 1.0f;
-    const float e = swing_ease(sigma, style.swing_peak);
-    // The foot turns to its heel-strike pitch in the later part of the swing.
-    return {lp.swing->arc.point_at_length(e * lp.swing->arc.length()),
-            glm::slerp(lp.swing->from, lp.swing->to, smoothstep01((sigma - style.swing_turn_start) / style.swing_turn_span))};
+    if (binds) *binds = sigma < kSwingFreeFrom || sigma >= kSwingBindsFrom;
+    return lp.swing->at(sigma);
   };
-  for (int leg = 0; leg < 2; ++leg) ankle[leg] = ankle_at(leg, 0.0f, &toe_pitch[leg]);
+  bool binds[2] = {true, true};
+  for (int leg = 0; leg < 2; ++leg) ankle[leg] = ankle_at(leg, 0.0f, &toe_pitch[leg], &binds[leg]);
   if (settle > 0.0f) {
     // Standing: each foot rolls from its place in stance at the held phase to flat on its footprint (a trailing
     // heel comes down about the ball, a landing forefoot rolls down about the heel), so the stance has both soles
@@ -603,7 +686,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
                                                                                 style.idle_sway_period));
   glm::vec3 root_translation{motion.sway, -style.nominal_drop, 0.0f};
   const glm::vec3 ankle_world[2] = {ankle[0].position, ankle[1].position};
-  const float now_limit = reach_limit(rig, frame, motion, ankle_world, 1e9f, 0.0f);
+  if (settle > 0.0f) binds[0] = binds[1] = true;
+  const float now_limit = reach_limit(rig, frame, motion, ankle_world, 1e9f, 0.0f, binds);
   const float curvature = style.bob_curvature / scale;  // humanoid units
   g[kGaitDipAge] += dt;
   if (now_limit <= g[kGaitDipHeight] + curvature * g[kGaitDipAge] * g[kGaitDipAge]) {
@@ -631,9 +715,11 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     const float at_phase = frac(phase + ahead_cycles);
     const float u = ahead / window_time;
     const Pose2 there{glm::mix(pelvis.position, window_end.position, u), pelvis.heading + u * heading_change};
-    const glm::vec3 feet[2] = {ankle_at(0, ahead, nullptr).position, ankle_at(1, ahead, nullptr).position};
+    bool binds_there[2];
+    const glm::vec3 feet[2] = {ankle_at(0, ahead, nullptr, &binds_there[0]).position,
+                               ankle_at(1, ahead, nullptr, &binds_there[1]).position};
     const float limit = reach_limit(rig, WalkerFrame{there.position, there.heading, scale},
-                                    pelvis_motion(style, at_phase), feet, 1e9f, 0.0f);
+                                    pelvis_motion(style, at_phase), feet, 1e9f, 0.0f, binds_there);
     future = std::min(future, limit + curvature * ahead * ahead);
   }
   const float past = g[kGaitDipHeight] + curvature * g[kGaitDipAge] * g[kGaitDipAge];
@@ -664,10 +750,20 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     write_quat(lanes, rig.ball[leg], i, pitch(-std::min(toe_pitch[leg], rig.toe_limit)));
 
   // ---- IK goals --------------------------------------------------------------------------------------------
-  for (int leg = 0; leg < 2; ++leg)
-    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, frame.to_humanoid(ankle[leg].position),
-               frame.to_humanoid(ankle[leg].orientation),
+  for (int leg = 0; leg < 2; ++leg) {
+    glm::vec3 goal = frame.to_humanoid(ankle[leg].position);
+    if (!binds[leg]) {
+      // A swing foot the pelvis did not wait for is drawn in to the leg's reach (at a fast walk the normative
+      // swing's nearly straight knee in late swing put it a few centimetres beyond): the foot trails a little
+      // rather than the pelvis dropping for it (which made 1 cm/frame^2 jolts when the cadence changed).
+      const glm::vec3 hip = root_translation + (hip_position(rig, motion, leg) - glm::vec3(motion.sway, 0.0f, 0.0f));
+      const glm::vec3 reach = goal - hip;
+      const float most = 0.998f * rig.leg_reach[leg], length = glm::length(reach);
+      if (length > most) goal = hip + reach * (most / length);
+    }
+    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, goal, frame.to_humanoid(ankle[leg].orientation),
                IkMode::PositionOrientation);
+  }
   const float swing_scale = std::clamp(gp.step_length * track.speed_ratio / (0.7f * scale), 0.3f, 1.6f);
   for (int arm = 0; arm < 2; ++arm) {
     // Left arm back at left heel strike (phase 0), forward half a cycle later; the right arm the opposite.
@@ -756,6 +852,8 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
       reach = std::max(reach, glm::length(thigh + glm::angleAxis(theta, limb.flexion_axis) * shin));
     }
     rig.leg_reach[leg] = reach;
+    rig.thigh_rest[leg] = thigh;
+    rig.shin_rest[leg] = shin;
   }
   const JointLimits& toe = skeleton.limits[rig.ball[0]];
   rig.toe_limit = toe.present ? std::max(-toe.lower.x, 0.0f) : 0.6f;

@@ -9,11 +9,11 @@
 // lowest in double support (the pelvis is as high as both stance legs can reach, capped by a nominal height, so
 // knees flex as much as the step needs and never more), plus a small loading-response drop after each heel
 // strike; lateral sway towards the stance leg; pelvic rotation about the vertical (+-4 deg) and tilt (list, the
-// swing side drops +-4 deg); stance with three rockers: heel strike toes up rolling down about the heel, a flat
-// foot, then a heel rise onto the ball (the midtarsal joint keeping the toes on the ground) and, once the toes
-// bend no further, about the toe tip; a swing arc that lifts the heel behind (the knee folds) and clears the
-// ground, timed by a distance curve that starts and ends at rest (triangular velocity); arms swung about the
-// hanging pose. Joint-angle curves against a normative walk: systems/gait_metrics.h GaitCycleRecorder.
+// swing side drops +-4 deg, and a forward tilt growing with cadence); stance with three rockers: heel strike toes
+// up rolling down about the heel, a flat foot, then a heel rise onto the ball (the midtarsal joint keeping the
+// toes on the ground) and, once the toes bend no further, about the toe tip; a swing whose ankle and foot follow
+// a normative swing's joint angles (kSwingHipDeg...) on the walker's own legs, clearing the ground; arms swung
+// about the hanging pose. Joint-angle curves against a normative walk: systems/gait_metrics.h GaitCycleRecorder.
 //
 // Cadence may change at any time: phase and distance integrate it, footprints are placed once at toe-off, so a
 // change never moves a planted foot or pops the pelvis.
@@ -47,13 +47,19 @@ struct GaitStyle {
   float pelvis_yaw = 0.07f;          // pelvic rotation amplitude about the vertical (~4 deg)
   float pelvis_tilt = 0.07f;         // pelvic list amplitude (~4 deg), swing side down
   float lateral_sway = 0.022f;       // pelvis shift towards the stance leg
-  // Constant forward (anterior) pelvic tilt. The hip limits are relative to the pelvis, and a trailing thigh
-  // needs ~30 deg of extension at toe-off; real pelves tilt ~10 deg forward, which is what leaves room for it.
-  // Without it the report measured hip extension 0.013 rad past its 0.5 rad limit.
-  float pelvis_anterior_tilt = 0.15f;
+  // Pelvic tilt (forward positive) at a comfortable cadence. Hip flexion is measured against the pelvis: the
+  // OpenSim subject's pelvis tilts 3.6-6.2 deg backwards (pelvis_tilt), and with the earlier 0.15 forward every
+  // hip angle read ~13 deg more flexed than the subject's (hip RMS 12.8 -> 4.2 deg with -0.08).
+  float pelvis_anterior_tilt = -0.08f;
+  // The tilt grows forward with cadence above pelvis_tilt_from_cadence (rad per step/min), as a faster walker's
+  // pelvis does: the longer stride otherwise extends the trailing hip past its 28.6 deg limit (measured -33 deg at
+  // 1.8 m/s with a constant tilt; with the growth -24, 0 limit violations in the gait report).
+  float pelvis_tilt_per_cadence = 0.0055f;
+  float pelvis_tilt_from_cadence = 98.0f;
   // Pelvis below its rest height at mid-stance: 3 mm leaves the stance knee ~5 deg flexed there (0.02 gave 25).
   float nominal_drop = 0.003f;
-  float loading_dip = 0.012f;        // extra pelvis drop in loading response (the stance knee yields ~15 deg)
+  // Extra pelvis drop in loading response: the stance knee yields ~19 deg (subject: 23); 0.012 gave 13.
+  float loading_dip = 0.025f;
   float loading_window = 0.3f;       // of a cycle after each heel strike, over which that drop rises and ends
   // The pelvis height follows parabolas of this curvature (m/s^2) through the lowest heights the last and the
   // next heel strike allow, so the bob is smooth; hard reach limits alone gave ~1 cm/frame kinks.
@@ -74,22 +80,18 @@ struct GaitStyle {
   // Foot pitch at toe-off (~63 deg): about the ball until the toes bend no further (LocomotionRig::toe_limit),
   // then about the toe tip.
   float toe_off_pitch = 1.1f;
-  // Ankle lift above the straight line at 60 % of the swing; 0.04 with the early knot below (0.06 with it kept
-  // the thigh lifted, hip flexion 47 deg in late swing). The toes and heel clear the ground by >= 16 mm
-  // (swing_clearance_min_mm in the gait report).
-  float swing_clearance = 0.04f;
-  // Early-swing knot: the ankle lifts this high above the straight line, behind the body, which is what folds
-  // the swing knee (~60 deg); with a single raised mid-swing knot the knee peaked at 51.
-  float swing_lift = 0.18f;
-  float swing_lift_at = 0.12f;       // where along the swing that knot sits (fraction of from -> landing)
-  // The swing ankle's distance curve: a triangular velocity with its peak at this fraction of the swing (the
-  // foot leaves a little quicker than it lands); 0.35 folded the knee sooner but brought the thigh forward too
-  // early (RMS against the subject: hip 14.0 against 12.8 deg).
-  float swing_peak = 0.45f;
-  // The swing foot turns from its toe-off pitch to its heel-strike pitch over [start, start + span] of the swing:
-  // turning from the start (the old 1.5 x distance) pressed the ankle onto its 20 deg dorsiflexion limit while
-  // the shin still pointed back.
-  float swing_turn_start = 0.25f, swing_turn_span = 0.6f;
+  // How fast the heel still rises at toe-off, as a fraction of the rise's mean rate. 0 (smoothstep) eased the foot
+  // to rest just as the swing snatched it up, so the trailing leg's reach made a sharp dip right at toe-off that
+  // the pelvis could not anticipate when the cadence changed (1.7 cm/frame^2 jolts); 0.85 rounds it (and the
+  // subject's foot turns fastest there too: ankle RMS 11.6 -> 10.5 deg). It applies in full from 110 steps/min
+  // and fades out below 90: a slow walker's heel then rose too late, the pelvis sank in double support and the
+  // knee landed 11 deg bent at 0.8 m/s (3 deg without).
+  float heel_rise_end_slope = 0.85f;
+  // The swing follows the normative swing's joint angles (systems/locomotion.cpp kSwingHipDeg...); its knots in
+  // the middle of the swing are raised where the toe tip or heel would pass lower than this above the ground
+  // (swing_clearance_min_mm in the gait report: 13 mm with 0.025; 0.035 gave 21 mm but folded the knee 2 deg
+  // more than the subject's through the swing).
+  float swing_clearance = 0.025f;
   float arm_swing = 0.17f;           // wrist travel forward/back at a 0.7 m step, scaled with step length
   float cadence_rate = 25.0f;        // how fast cadence eases to its target, steps/min per second
   float speed_period = 18.0f;        // seconds per cycle of the speed schedule
@@ -127,6 +129,19 @@ struct GaitStyle {
   float idle_sway_period = 4.0f;    // s
 };
 
+// The swing from toe-off to heel strike in joint angles: kSwingKnots samples evenly spaced in time from the
+// normative walk shipped in data/normative_gait.csv, from its toe-off (kSwingToeOffPhase of the cycle, knee 35 deg)
+// to its heel strike; hip flexion, knee flexion, ankle dorsiflexion in degrees (a test checks them against the
+// table). The swing ankle's knots are these angles' forward kinematics on the walker's own legs, so the hip,
+// knee and ankle of a swing take a person's timing. Rejected, after measuring it (issue 21): a hand-placed arc
+// walked by an eased distance curve, whose foot left toe-off at rest while the hip moved on, so the knee
+// re-extended after toe-off (26 -> 15 deg) and peaked late (RMS against the subject: knee 12.1 deg, now 7.3).
+inline constexpr std::size_t kSwingKnots = 9;
+inline constexpr float kSwingToeOffPhase = 0.62f;
+inline constexpr float kSwingHipDeg[kSwingKnots] = {-15.76f, -5.25f, 4.07f, 12.14f, 17.44f, 19.82f, 19.71f, 18.15f, 17.23f};
+inline constexpr float kSwingKneeDeg[kSwingKnots] = {34.69f, 55.23f, 67.25f, 69.08f, 61.99f, 46.58f, 25.40f, 5.51f, -2.15f};
+inline constexpr float kSwingAnkleDeg[kSwingKnots] = {5.21f, -8.43f, -4.97f, 0.52f, 0.28f, 0.87f, -1.67f, -3.20f, -2.03f};
+
 // Rig-constant data the locomotion system needs, derived once from the skeleton.
 struct LocomotionRig {
   std::vector<LimbChain> limbs;      // make_limbs order: left leg, right leg, left arm, right arm
@@ -138,6 +153,7 @@ struct LocomotionRig {
   glm::vec3 tip_rest[2];             // the toe tip's ground contact (l/r_forefoot_tip at the ball's height)
   float toe_limit = 0.6f;            // how far the midtarsal may dorsiflex to keep the toes down (rad)
   float leg_reach[2] = {0, 0};       // |hip-knee| + |knee-ankle|
+  glm::vec3 thigh_rest[2], shin_rest[2];  // hip -> knee and knee -> ankle at rest (humanoid axes): the swing's FK
   float rig_height = 1.75f;          // stature of the rig (skull_tip, else top joint + 0.13 m)
   CardinalSpline wrist_path[2];      // closed loops in humanoid space: back, mid, front, mid
 };
