@@ -66,38 +66,28 @@ void BM_CardinalSplineBuild(benchmark::State& state) {
 }
 BENCHMARK(BM_CardinalSplineBuild);
 
-// One swing-foot arc per frame: 5 knots (lift, rise, peak, fall, set down), built and evaluated once, which is
-// what a walker in swing costs. The knots move a little per iteration so nothing is hoisted out of the loop.
-std::array<glm::vec3, 5> swing_knots(float shift) {
-  return {glm::vec3(shift, 0.05f, 0.0f), glm::vec3(shift + 0.3f, 0.12f, 0.02f),
-          glm::vec3(shift + 0.7f, 0.15f, 0.03f), glm::vec3(shift + 1.1f, 0.08f, 0.01f),
-          glm::vec3(shift + 1.4f, 0.05f, 0.0f)};
+// One swing foot per frame: 9 knots (ankle and foot pitch, evenly spaced in time) evaluated once, what a walker in
+// swing costs besides placing the knots. The knots move a little per iteration so nothing is hoisted out of the loop.
+std::array<glm::vec4, 9> swing_knots(float shift) {
+  std::array<glm::vec4, 9> k;
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    const float u = static_cast<float>(i) / 8.0f;
+    k[i] = glm::vec4(shift + 1.4f * u, 0.05f + 0.1f * u * (1.0f - u), 0.02f * u, 0.8f - u);
+  }
+  return k;
 }
 
-void BM_SmallPathBuildAndEvaluate(benchmark::State& state) {
+void BM_SwingKnotsEvaluate(benchmark::State& state) {
   std::size_t i = 0;
   for (auto _ : state) {
     const float phase = static_cast<float>(i & 63) / 64.0f;
-    const std::array<glm::vec3, 5> knots = swing_knots(0.001f * static_cast<float>(i & 7));
-    const strata::SmallCardinalPath path(knots);
-    benchmark::DoNotOptimize(path.point_at_length(phase * path.length()));
+    const std::array<glm::vec4, 9> knots = swing_knots(0.001f * static_cast<float>(i & 7));
+    benchmark::DoNotOptimize(strata::cardinal_through(knots, phase));
     ++i;
   }
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_SmallPathBuildAndEvaluate);
-
-void BM_SmallPathBuildOnly(benchmark::State& state) {
-  std::size_t i = 0;
-  for (auto _ : state) {
-    const std::array<glm::vec3, 5> knots = swing_knots(0.001f * static_cast<float>(i & 7));
-    const strata::SmallCardinalPath path(knots);
-    benchmark::DoNotOptimize(path.length());
-    ++i;
-  }
-  state.SetItemsProcessed(state.iterations());
-}
-BENCHMARK(BM_SmallPathBuildOnly);
+BENCHMARK(BM_SwingKnotsEvaluate);
 
 void BM_DistanceCurve(benchmark::State& state) {
   const strata::DistanceCurve curve({0.0f, 0.3f, 0.7f, 1.0f}, {0.0f, 0.1f, 1.3f, 1.4f});

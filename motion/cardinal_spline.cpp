@@ -11,12 +11,8 @@ namespace strata {
 namespace {
 
 // Sub-intervals per segment of the arc-length tables. 8 keeps the 5-point Gauss-Legendre error of |P'| below
-// ~1e-5 relative even at tension 0.9, where |P'| has a near-kink at every knot; the small per-frame path uses 4
-// (its size is fixed in the header) because a foot arc of 3-5 knots is gentle and is rebuilt every frame.
+// ~1e-5 relative even at tension 0.9, where |P'| has a near-kink at every knot.
 constexpr std::size_t kSubdivisions = 8;
-constexpr std::size_t kSmallSubdivisions = 4;
-static_assert((SmallCardinalPath::kMaxPoints - 1) * kSmallSubdivisions + 1 == 21,
-              "SmallCardinalPath::table_ in the header assumes 4 sub-intervals per segment");
 
 // 5-point Gauss-Legendre on [-1, 1]: nodes 0, +-x1, +-x2 with weights w0, w1, w2 (exact for degree 9).
 constexpr double kGaussX1 = 0.5384693101056830910363144;
@@ -404,39 +400,20 @@ float DistanceCurve::speed(float t) const {
   return static_cast<float>((d1 - d0) * d01 / h + d10 * slopes_[k] + d11 * slopes_[k + 1]);
 }
 
-// ---- SmallCardinalPath --------------------------------------------------------------------------------------
+// ---- cardinal_through -----------------------------------------------------------------------------------------
 
-SmallCardinalPath::SmallCardinalPath(std::span<const glm::vec3> points, float tension)
-    : s_(0.5f * (1.0f - tension)) {
-  if (points.empty() || points.size() > kMaxPoints) {
-    throw std::invalid_argument("SmallCardinalPath: needs 1 to " + std::to_string(kMaxPoints) + " points, got " +
-                                std::to_string(points.size()));
-  }
-  if (!std::isfinite(tension)) throw std::invalid_argument("SmallCardinalPath: tension is not finite");
-  for (const glm::vec3& p : points) {
-    if (!finite(p)) throw std::invalid_argument("SmallCardinalPath: a control point is not finite");
-    if (count_ == 0 || p != points_[count_ - 1]) points_[count_++] = p;
-  }
-  // A single distinct point (a foot that does not move this frame) is a valid path of length 0, not an error:
-  // the caller rebuilds every frame and should not need a special case.
-  if (count_ < 2) return;
-  const double s = s_;
-  build_table(table_.data(), count_ - 1, kSmallSubdivisions,
-              [&](std::size_t k) { return cubic_of(open_controls(points_.data(), count_, k), s); });
-}
-
-float SmallCardinalPath::length() const { return count_ < 2 ? 0.0f : table_[(count_ - 1) * kSmallSubdivisions]; }
-
-glm::vec3 SmallCardinalPath::point_at_length(float s_length) const {
-  if (count_ < 2) return points_[0];
-  const double total = length();
-  const double target = normalise(s_length, total, false);
-  if (target >= total) return points_[count_ - 1];
-  const double s = s_;
-  const Located at = locate_length(table_.data(), count_ - 1, kSmallSubdivisions, target, [&](std::size_t k) {
-    return cubic_of(open_controls(points_.data(), count_, k), s);
-  });
-  return glm::vec3(at.cubic.point(at.x));
+glm::vec4 cardinal_through(std::span<const glm::vec4> values, float u) {
+  const std::size_t n = values.size();
+  if (n < 2) return n == 1 ? values[0] : glm::vec4(0.0f);
+  const float x = (std::isfinite(u) ? std::clamp(u, 0.0f, 1.0f) : 0.0f) * static_cast<float>(n - 1);
+  const std::size_t i = std::min(static_cast<std::size_t>(x), n - 2);
+  const float t = x - static_cast<float>(i), t2 = t * t, t3 = t2 * t;
+  const glm::vec4& p0 = values[i == 0 ? 0 : i - 1];
+  const glm::vec4& p1 = values[i];
+  const glm::vec4& p2 = values[i + 1];
+  const glm::vec4& p3 = values[std::min(i + 2, n - 1)];
+  return 0.5f * (2.0f * p1 + (p2 - p0) * t + (2.0f * p0 - 5.0f * p1 + 4.0f * p2 - p3) * t2 +
+                 (3.0f * p1 - p0 - 3.0f * p2 + p3) * t3);
 }
 
 }  // namespace strata

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 namespace strata {
 
@@ -71,22 +72,10 @@ class DistanceCurve {
   std::vector<float> times_, distances_, slopes_;
 };
 
-// A short path whose arc-length table lives on the stack, for curves rebuilt every frame (a swinging foot):
-// up to kMaxPoints control points, open, no allocation. Throws std::invalid_argument for 0 or more than
-// kMaxPoints points or non-finite input; consecutive repeats are removed, and one distinct point is a path of
-// length 0 that stays on it.
-class SmallCardinalPath {
- public:
-  static constexpr std::size_t kMaxPoints = 6;
-  SmallCardinalPath(std::span<const glm::vec3> points, float tension = 0.0f);
-  float length() const;
-  glm::vec3 point_at_length(float s) const;  // s clamped to [0, length()]
-
- private:
-  std::array<glm::vec3, kMaxPoints> points_{};
-  std::size_t count_ = 0;
-  float s_ = 0.5f;
-  std::array<float, (kMaxPoints - 1) * 4 + 1> table_{};
-};
+// Uniform Cardinal interpolation (tension 0, Catmull-Rom) through `values` evenly spaced over u in [0, 1] (u
+// clamped; the end values repeat as the outer control points), for curves rebuilt every frame and walked by time,
+// not by arc length: a swinging foot's knots, evenly spaced in time (systems/locomotion.cpp). No allocation.
+// Needs at least 2 values (one is returned as is).
+glm::vec4 cardinal_through(std::span<const glm::vec4> values, float u);
 
 }  // namespace strata

@@ -36,21 +36,6 @@ float smoothstep01(float x) {
 constexpr float kSwingFreeFrom = 0.2f;
 constexpr float kSwingBindsFrom = 0.85f;
 
-// A uniform Cardinal spline (tension 0, Catmull-Rom) through n evenly spaced values at sigma in [0, 1]; the end
-// values are repeated as the outer control points.
-template <typename T>
-T cardinal_at(const T* v, std::size_t n, float sigma) {
-  const float x = std::clamp(sigma, 0.0f, 1.0f) * static_cast<float>(n - 1);
-  const std::size_t i = std::min(static_cast<std::size_t>(x), n - 2);
-  const float t = x - static_cast<float>(i), t2 = t * t, t3 = t2 * t;
-  const T& p0 = v[i == 0 ? 0 : i - 1];
-  const T& p1 = v[i];
-  const T& p2 = v[i + 1];
-  const T& p3 = v[std::min(i + 2, n - 1)];
-  return 0.5f * ((2.0f * p1) + (p2 - p0) * t + (2.0f * p0 - 5.0f * p1 + 4.0f * p2 - p3) * t2 +
-                 (3.0f * p1 - p0 - 3.0f * p2 + p3) * t3);
-}
-
 // Polynomial smooth minimum: never above min(a, b), equal to it when |a - b| >= k.
 float smooth_min(float a, float b, float k) {
   const float h = std::max(k - std::abs(a - b), 0.0f) / k;
@@ -556,13 +541,12 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   // leg's angles lift it above that line. The foot's pitch is the normative shin angle less the ankle's
   // dorsiflexion, eased from the toe-off pitch over the first 20 % (over 40 %, the ankle stayed 5 deg more
   // plantarflexed through early swing) and into the heel-strike pitch over the last 40 %, so both ends join the
-  // stance rockers exactly. It lands on the heel-strike pose (toes up), not on the flat
-  // footprint.
+  // stance rockers exactly. It lands on the heel-strike pose (toes up), not on the flat footprint.
   struct Swing {
     glm::vec4 knots[kSwingKnots];  // ankle position (world) and foot pitch (rad, toes down) at each knot
     glm::quat from_yaw, to_yaw;
     AnklePose at(float sigma) const {
-      const glm::vec4 k = cardinal_at(knots, kSwingKnots, sigma);
+      const glm::vec4 k = cardinal_through(knots, sigma);
       const glm::quat heading = glm::slerp(from_yaw, to_yaw, smoothstep01((sigma - 0.25f) / 0.6f));
       return {glm::vec3(k), heading * pitch(k.w)};
     }
@@ -573,7 +557,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     const glm::vec3 chord = strike.position - from;
     float forward[kSwingKnots], up[kSwingKnots], shin_pitch[kSwingKnots];
     for (std::size_t k = 0; k < kSwingKnots; ++k) {
-      // Hip flexion is measured against the pelvis, which tilts forward: the thigh's own angle is less by the tilt.
+      // Hip flexion is measured against the pelvis: the thigh's own angle is the hip's less the pelvis' forward tilt.
       const float thigh = glm::radians(kSwingHipDeg[k]) - style.pelvis_anterior_tilt;
       const float knee = glm::radians(kSwingKneeDeg[k]);
       const glm::vec3 rel = pitch(-thigh) * (rig.thigh_rest[leg] + pitch(knee) * rig.shin_rest[leg]) * scale;
@@ -643,8 +627,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     }
   }
   // `ahead` in seconds, at most ~0.3 cycle so a leg changes mode at most once.
-  // `binds` (optional): whether the leg's reach holds the pelvis down, false for a swing foot before
-  // kSwingBindsFrom of its swing.
+  // `binds` (optional): whether the leg's reach holds the pelvis down, false for a swing foot between
+  // kSwingFreeFrom and kSwingBindsFrom of its swing.
   auto ankle_at = [&](int leg, float ahead, float* foot_pitch, bool* binds = nullptr) -> AnklePose {
     const LegPath& lp = legs[leg];
     const float psi = lp.psi + ahead / gp.cycle_time;  // not wrapped: > 1 means past the next heel strike

@@ -21,7 +21,6 @@ using glm::dvec3;
 using glm::vec3;
 using strata::CardinalSpline;
 using strata::DistanceCurve;
-using strata::SmallCardinalPath;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -662,52 +661,33 @@ TEST(DoubleInterpolant, WalkerTravelsTheScheduledDistance) {
   EXPECT_NEAR(walked, total, 1e-4 * total);
 }
 
-// ---- SmallCardinalPath ---------------------------------------------------------------------------------------
+// ---- cardinal_through -----------------------------------------------------------------------------------------
 
-TEST(SmallCardinalPath, AgreesWithTheReferenceAndTheFullSpline) {
-  // A swinging foot: lift, mid-swing high point, set down one stride ahead.
-  const std::vector<vec3> pts = {{0.0f, 0.05f, 0.0f}, {0.3f, 0.12f, 0.02f}, {0.7f, 0.15f, 0.03f},
-                                 {1.1f, 0.08f, 0.01f}, {1.4f, 0.05f, 0.0f}};
-  for (float tension : {0.0f, 0.5f}) {
-    const SmallCardinalPath small(pts, tension);
-    const CardinalSpline full(pts, tension, false);
-    const double brute = Reference(pts, tension, false).polyline_length(100000);
-    EXPECT_NEAR(small.length(), brute, 1e-4 * brute);
-    for (int i = 0; i <= 200; ++i) {
-      const float s = small.length() * i / 200.0f;
-      EXPECT_LT(distance(small.point_at_length(s), full.point_at_length(s)), 1e-5) << "s=" << s;
-    }
-    EXPECT_LT(distance(small.point_at_length(0.0f), pts.front()), 1e-6);
-    EXPECT_LT(distance(small.point_at_length(small.length()), pts.back()), 1e-6);
-    EXPECT_LT(distance(small.point_at_length(-1.0f), pts.front()), 1e-6);
-    EXPECT_LT(distance(small.point_at_length(small.length() + 1.0f), pts.back()), 1e-6);
+TEST(CardinalThrough, PassesThroughEveryValueAtItsTimeAndClamps) {
+  const std::vector<glm::vec4> v = {{0, 0, 0, 0}, {1, 2, 0, 0.5f}, {2, 1, 1, -0.2f}, {4, 0, 1, 0}, {5, 3, 2, 1}};
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const glm::vec4 p = strata::cardinal_through(v, static_cast<float>(k) / 4.0f);
+    EXPECT_LT(glm::length(p - v[k]), 1e-6f) << "value " << k;
   }
+  EXPECT_EQ(strata::cardinal_through(v, -1.0f), v.front());
+  EXPECT_EQ(strata::cardinal_through(v, 2.0f), v.back());
+  EXPECT_EQ(strata::cardinal_through(v, std::numeric_limits<float>::quiet_NaN()), v.front());
+  EXPECT_EQ(strata::cardinal_through(std::span<const glm::vec4>(v.data(), 1), 0.5f), v.front());
 }
 
-TEST(SmallCardinalPath, TwoPointsAndDegenerateInput) {
-  const vec3 a(0.0f, 0.0f, 0.0f), b(0.0f, 3.0f, 4.0f);
-  const std::vector<vec3> two = {a, b};
-  const SmallCardinalPath line(two, 0.6f);
-  EXPECT_NEAR(line.length(), 5.0f, 1e-5);
-  for (int i = 0; i <= 10; ++i) {
-    const float s = 0.5f * i;
-    EXPECT_LT(distance(line.point_at_length(s), a + s * glm::normalize(b - a)), 1e-5);
+TEST(CardinalThrough, ReproducesEvenlySpacedLinearValuesAwayFromTheEnds) {
+  // Catmull-Rom reproduces a straight line at even speed wherever both neighbours are real knots.
+  std::vector<glm::vec4> v;
+  for (int k = 0; k < 6; ++k) v.emplace_back(2.0f * k, -1.0f * k, 0.5f * k, 3.0f);
+  for (int i = 0; i <= 100; ++i) {
+    const float u = 0.2f + 0.6f * static_cast<float>(i) / 100.0f;  // segments 1 to 3 of 5
+    const glm::vec4 expected(10.0f * u, -5.0f * u, 2.5f * u, 3.0f);
+    EXPECT_LT(glm::length(strata::cardinal_through(v, u) - expected), 1e-5f) << "u=" << u;
   }
-  // Repeats collapse; a single distinct point is a path of length 0 that stays put.
-  const std::vector<vec3> repeated = {a, a, b, b};
-  EXPECT_NEAR(SmallCardinalPath(repeated).length(), 5.0f, 1e-5);
-  const std::vector<vec3> still = {b, b, b};
-  const SmallCardinalPath stay(still);
-  EXPECT_EQ(stay.length(), 0.0f);
-  EXPECT_EQ(stay.point_at_length(1.0f), b);
-
-  const std::vector<vec3> too_many(SmallCardinalPath::kMaxPoints + 1, a);
-  EXPECT_THROW(SmallCardinalPath(std::span<const vec3>(too_many)), std::invalid_argument);
-  EXPECT_THROW(SmallCardinalPath(std::span<const vec3>()), std::invalid_argument);
-  const std::vector<vec3> with_nan = {a, vec3(std::numeric_limits<float>::quiet_NaN())};
-  EXPECT_THROW(SmallCardinalPath(std::span<const vec3>(with_nan)), std::invalid_argument);
-  const std::vector<vec3> full(SmallCardinalPath::kMaxPoints, a);
-  EXPECT_NO_THROW(SmallCardinalPath(std::span<const vec3>(full)));
+  // At the ends the repeated value slows the curve down but it stays between its neighbours.
+  const glm::vec4 first = strata::cardinal_through(v, 0.1f);
+  EXPECT_GT(first.x, 0.0f);
+  EXPECT_LT(first.x, 2.0f);
 }
 
 }  // namespace
