@@ -115,8 +115,8 @@ Smoothness walk_with_cadences(float c0, float c1, float c2) {
 }
 
 // A cadence change must not pop: the pelvis may not accelerate harder than it does in steady walking at the
-// cadences involved, and no joint may move faster than the swing foot's designed peak speed (the triangular
-// swing velocity peaks at 2 stride / t_swing) at the fastest of them.
+// cadences involved, and no joint may move faster than twice the swing foot's mean speed (2 stride / t_swing)
+// at the fastest of them.
 TEST(Locomotion, CadenceChangesWithoutPop) {
   const Smoothness changing = walk_with_cadences(90.0f, 130.0f, 80.0f);
   float steady = 0.0f;
