@@ -91,7 +91,7 @@ struct GaitStyle {
   // and fades out below 90: a slow walker's heel then rose too late, the pelvis sank in double support and the
   // knee landed 11 deg bent at 0.8 m/s (3 deg without).
   float heel_rise_end_slope = 0.85f;
-  // The swing follows the normative swing's joint angles (systems/locomotion.cpp kSwingHipDeg...); its knots in
+  // The swing follows the normative swing's joint angles (kSwingHipDeg... below); its knots in
   // the middle of the swing are raised where the toe tip or heel would pass lower than this above the ground
   // (swing_clearance_min_mm in the gait report: 13 mm with 0.025; 0.035 gave 21 mm but folded the knee 2 deg
   // more than the subject's through the swing).
@@ -139,7 +139,8 @@ struct GaitStyle {
 // table). The swing ankle's knots are these angles' forward kinematics on the walker's own legs, so the hip,
 // knee and ankle of a swing take a person's timing. Rejected, after measuring it (issue 21): a hand-placed arc
 // walked by an eased distance curve, whose foot left toe-off at rest while the hip moved on, so the knee
-// re-extended after toe-off (26 -> 15 deg) and peaked late (RMS against the subject: knee 12.1 deg, now 7.3).
+// re-extended after toe-off (26 -> 15 deg) and peaked late (RMS against the subject: knee 12.1 deg; 7.3 with
+// this swing alone, 5.9 with the pelvis changes below too).
 inline constexpr std::size_t kSwingKnots = 9;
 inline constexpr float kSwingToeOffPhase = 0.62f;
 inline constexpr float kSwingHipDeg[kSwingKnots] = {-15.76f, -5.25f, 4.07f, 12.14f, 17.44f, 19.82f, 19.71f, 18.15f, 17.23f};
