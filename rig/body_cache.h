@@ -21,7 +21,6 @@ std::uint64_t body_cache_key(const Skeleton& skeleton, const BodyOptions& option
 // Directory of the cache, or nullopt when none can be used (disabled, no HOME).
 std::optional<std::filesystem::path> body_cache_directory();
 
-// Loads the levels stored under `key` in `file`; nullopt when absent or unusable for any reason.
 // Arrays of finite floats derived from a body (centres of rotation, ambient occlusion), cached beside it: an
 // 8-byte magic, the key, the item count, then count * floats_per_item floats. Loading gives nullopt for a missing,
 // stale (other magic or key), truncated, oversized (> max_items) or non-finite file; saving writes atomically and
@@ -32,6 +31,7 @@ std::optional<std::vector<float>> load_float_cache(const std::filesystem::path& 
 void save_float_cache(const std::filesystem::path& file, const char (&magic)[8], std::uint64_t key,
                       std::size_t floats_per_item, std::span<const float> values);
 
+// Loads the levels stored under `key` in `file`; nullopt when absent or unusable for any reason.
 std::optional<BodyLevels> load_body_cache(const std::filesystem::path& file, std::uint64_t key);
 // Stores `levels` under `key`; failures are silent (the cache is an optimisation).
 void save_body_cache(const std::filesystem::path& file, std::uint64_t key, const BodyLevels& levels);

@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <unordered_map>
 
@@ -13,7 +12,6 @@
 #include <tbb/parallel_for.h>
 
 #include "components/fnv_hasher.h"
-#include "io/atomic_file.h"
 #include "rig/body_cache.h"
 
 namespace strata {

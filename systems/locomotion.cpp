@@ -560,7 +560,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // Hip flexion is measured against the pelvis: the thigh's own angle is the hip's less the pelvis' forward tilt.
       const float thigh = glm::radians(kSwingHipDeg[k]) - style.pelvis_anterior_tilt;
       const float knee = glm::radians(kSwingKneeDeg[k]);
-      const glm::vec3 rel = pitch(-thigh) * (rig.thigh_rest[leg] + pitch(knee) * rig.shin_rest[leg]) * scale;
+      const glm::vec3 rel = pitch(-thigh) * rig.swing_leg[leg][k] * scale;
       forward[k] = rel.z, up[k] = rel.y;
       shin_pitch[k] = knee - thigh - glm::radians(kSwingAnkleDeg[k]);
     }
@@ -836,8 +836,8 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
       reach = std::max(reach, glm::length(thigh + glm::angleAxis(theta, limb.flexion_axis) * shin));
     }
     rig.leg_reach[leg] = reach;
-    rig.thigh_rest[leg] = thigh;
-    rig.shin_rest[leg] = shin;
+    for (std::size_t k = 0; k < kSwingKnots; ++k)
+      rig.swing_leg[leg][k] = thigh + pitch(glm::radians(kSwingKneeDeg[k])) * shin;
   }
   const JointLimits& toe = skeleton.limits[rig.ball[0]];
   rig.toe_limit = toe.present ? std::max(-toe.lower.x, 0.0f) : 0.6f;

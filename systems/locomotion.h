@@ -158,7 +158,9 @@ struct LocomotionRig {
   glm::vec3 tip_rest[2];             // the toe tip's ground contact (l/r_forefoot_tip at the ball's height)
   float toe_limit = 0.6f;            // how far the midtarsal may dorsiflex to keep the toes down (rad)
   float leg_reach[2] = {0, 0};       // |hip-knee| + |knee-ankle|
-  glm::vec3 thigh_rest[2], shin_rest[2];  // hip -> knee and knee -> ankle at rest (humanoid axes): the swing's FK
+  // Hip -> ankle with the knee bent as at each swing knot (kSwingKneeDeg), humanoid axes: the swing's forward
+  // kinematics less the hip's rotation, which depends on the walker's pelvis tilt and is applied per frame.
+  glm::vec3 swing_leg[2][kSwingKnots];
   float rig_height = 1.75f;          // stature of the rig (skull_tip, else top joint + 0.13 m)
   CardinalSpline wrist_path[2];      // closed loops in humanoid space: back, mid, front, mid
 };
