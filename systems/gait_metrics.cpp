@@ -147,32 +147,48 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
       }
       if (!swinging && !first_) {
         // Each contact point is still while it carries the foot: the heel through the heel rocker (heel strike to
-        // foot flat), the ankle while the foot is flat, the ball until the toes bend no further, the toe tip to
-        // toe-off. References are taken where each phase starts.
+        // foot flat), the ankle while the foot is flat, the ball until it lifts as the foot rolls onto the toe tip,
+        // the toe tip to toe-off. References are taken where each phase starts. Flat and ball-down are read off
+        // the pose itself (heel and ball within 0.1 mm of the ground), not off the heel rise's
+        // schedule: the walk raises the heel as early as the body's progress needs (systems/locomotion.cpp
+        // stance_pose), and a point that is still on the ground must not slide whatever the schedule says.
         const float psi_frac = l.gait[kGaitPhase * s + w] - 0.5f * static_cast<float>(leg);
         const float tau = (psi_frac - std::floor(psi_frac)) / gp.stance_fraction();
         if (tau < style_.heel_rocker) {
           report_.foot_slide_heel_mm_max = std::max(report_.foot_slide_heel_mm_max, distance_mm(heel, t.heel_ref));
         } else {
+          // On the ground (y = 0 here): the heel's contact within 0.1 mm of it, the ball joint within 0.1 mm of
+          // its rest height. A contact is tracked from the first frame it is down in this stance until it lifts.
+          constexpr float kLifted = 1e-4f;  // m
+          const bool heel_down = heel.y <= (rig_.heel_rest[leg].y) * scale + kLifted;
+          const bool ball_down = ball.y <= skeleton_.centers[rig_.ball[leg]].y * scale + kLifted;
           if (!t.flat) {
-            for (int k = 0; k < 3; ++k) {
-              t.ball_ref[k] = ball[k];
-              t.ankle_ref[k] = ankle[k];
-              t.tip_ref[k] = tip[k];
-            }
+            for (int k = 0; k < 3; ++k) t.tip_ref[k] = tip[k];
             t.flat = true;
-            t.ankle_tracking = true;
+            t.ankle_tracking = t.ball_tracking = false;
+            t.ankle_done = !heel_down;  // a stance first seen with the heel up (a walker starting mid-roll)
+            t.ball_done = !ball_down;
           }
-          const float x = std::clamp((tau - style_.heel_off) / (1.0f - style_.heel_off), 0.0f, 1.0f);
-          const float foot_pitch = style_.toe_off_pitch * x * x * (3.0f - 2.0f * x);
-          if (foot_pitch <= rig_.toe_limit)
+          if (!t.ankle_done && !t.ankle_tracking && heel_down) {
+            for (int k = 0; k < 3; ++k) t.ankle_ref[k] = ankle[k];
+            t.ankle_tracking = true;
+          } else if (t.ankle_tracking && !heel_down) {
+            t.ankle_tracking = false;
+            t.ankle_done = true;
+          }
+          if (!t.ball_done && !t.ball_tracking && ball_down) {
+            for (int k = 0; k < 3; ++k) t.ball_ref[k] = ball[k];
+            t.ball_tracking = true;
+          } else if (t.ball_tracking && !ball_down) {
+            t.ball_tracking = false;
+            t.ball_done = true;
+          }
+          if (t.ball_tracking)
             report_.foot_slide_ball_mm_max = std::max(report_.foot_slide_ball_mm_max, distance_mm(ball, t.ball_ref));
           report_.foot_slide_tip_mm_max = std::max(report_.foot_slide_tip_mm_max, distance_mm(tip, t.tip_ref));
-          if (t.ankle_tracking && tau < style_.heel_off)
+          if (t.ankle_tracking)
             report_.foot_slide_ankle_mm_max =
                 std::max(report_.foot_slide_ankle_mm_max, distance_mm(ankle, t.ankle_ref));
-          else
-            t.ankle_tracking = false;
         }
       }
       t.swinging = swinging;
@@ -222,6 +238,9 @@ GaitCycleRecorder::GaitCycleRecorder(const Skeleton& skeleton, const LocomotionR
   };
   const LimbChain& leg = rig.limbs[kLeftLeg];
   const LimbChain& arm = rig.limbs[kLeftArm];
+  rest_hip_ = rig.rest_hip_flexion;
+  rest_knee_ = rig.rest_knee_flexion;
+  rest_ankle_ = rig.rest_ankle_dorsiflexion;
   hip_ = leg.upper;
   knee_ = leg.middle;
   ankle_ = leg.lower;
@@ -251,9 +270,9 @@ void GaitCycleRecorder::observe(const WalkerLanes& l) {
   };
   Sample now;
   now.phase = l.gait[kGaitPhase * s + w];
-  now.value[0] = kDeg * sagittal_angle(shin_, rotation(knee_) * shin_);
-  now.value[1] = -kDeg * sagittal_angle(thigh_, rotation(hip_) * thigh_);
-  now.value[2] = -kDeg * sagittal_angle(foot_, rotation(ankle_) * foot_);
+  now.value[0] = kDeg * (rest_knee_ + sagittal_angle(shin_, rotation(knee_) * shin_));
+  now.value[1] = kDeg * (rest_hip_ - sagittal_angle(thigh_, rotation(hip_) * thigh_));
+  now.value[2] = kDeg * (rest_ankle_ - sagittal_angle(foot_, rotation(ankle_) * foot_));
   now.value[3] = -kDeg * sagittal_angle(upper_arm_, rotation(shoulder_) * upper_arm_);
   // Forward lean is the trunk's top moving to +Z: a positive turn about +X.
   now.value[4] = kDeg * sagittal_angle(trunk_, position(skullbase_) - position(vl5_));

@@ -55,7 +55,9 @@ class GaitMetrics {
     float heel_ref[3] = {0, 0, 0};
     float tip_ref[3] = {0, 0, 0};
     bool flat = false;  // foot flat reached this stance (the references of ball, ankle and tip taken)
-    bool ankle_tracking = false;
+    bool ankle_tracking = false;  // the heel still down: the flat foot's ankle must not move
+    bool ball_tracking = false;   // the ball still down: it carries the foot until the toe tip does
+    bool ankle_done = false, ball_done = false;  // lifted in this stance
   };
   struct WalkerTrack {
     LegTrack legs[2];
@@ -71,8 +73,10 @@ class GaitMetrics {
 };
 
 // One walker's joint-angle curves over a normalised gait cycle (0 = its left heel strike, the walk's phase 0),
-// measured from the local rotations the systems wrote, as a gait lab reads a side view. Left side; degrees:
-//   knee_flexion         shin about the knee's hinge (+X), flexion positive (0 = H-Anim's straight rest leg)
+// measured from the local rotations the systems wrote, as a gait lab reads a side view. Left side; degrees; the
+// leg's angles in the lab's terms, zero for vertical thigh and shin over a flat foot (the rig's rest pose adds
+// LocomotionRig::rest_*: the default leg leans 5 deg, and ISO 200x's centres bend the rest knee 18 deg):
+//   knee_flexion         shin about the knee's hinge (+X) relative to the thigh, flexion positive
 //   hip_flexion          thigh relative to the pelvis, thigh forward positive
 //   ankle_dorsiflexion   hindfoot-to-midtarsal line relative to the shin, toes up positive
 //   shoulder_flexion     upper arm relative to the shoulder's parent, arm forward positive
@@ -109,6 +113,7 @@ class GaitCycleRecorder {
   std::size_t walker_, skip_;
   std::int32_t hip_, knee_, ankle_, ball_, shoulder_, elbow_, vl5_, skullbase_;
   glm::vec3 thigh_, shin_, foot_, upper_arm_, trunk_;
+  float rest_hip_ = 0, rest_knee_ = 0, rest_ankle_ = 0;  // LocomotionRig::rest_* (rad)
   std::vector<Sample> current_;
   bool started_ = false;
   bool counting_ = false;

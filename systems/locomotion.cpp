@@ -132,12 +132,9 @@ Pose2 landing_footprint(const LocomotionRig& rig, const GroundTrack& track, floa
   return footprint(rig, p, leg, scale);
 }
 
-// The foot's pitch in the heel rise, from heel_off to toe-off (fraction of stance tau): a cubic from rest to
-// toe_off_pitch, still rising at toe-off at heel_rise_end_slope times its mean rate.
-// Measured (issue 21): a later, steeper rise (x^2 or x^3, as the normative foot turns) with the subject's ~40 deg
-// at toe-off brought the ankle's RMS to 7-8 deg, but the trailing leg then reached its foot only with the pelvis
-// 7-9 cm down in double support (heel-strike knee 30 deg): the default skeleton's ankle sits 10 cm behind its
-// knee line, so its straight leg is shorter than the subject's.
+// The foot's pitch in the heel rise by schedule, from heel_off to toe-off (fraction of stance tau): a cubic from
+// rest to toe_off_pitch, still rising at toe-off at heel_rise_end_slope times its mean rate. The least the heel
+// rises: stance_pose raises it sooner where the body's progress needs it (GaitStyle::heel_hold_from).
 float heel_rise_pitch(float tau, const GaitStyle& style) {
   const float x = std::clamp((tau - style.heel_off) / (1.0f - style.heel_off), 0.0f, 1.0f);
   return style.toe_off_pitch * (x * x * (3.0f - 2.0f * x) + style.heel_rise_end_slope * x * x * (x - 1.0f));
@@ -148,23 +145,23 @@ struct AnklePose {
   glm::quat orientation;  // the foot's frame in world axes
 };
 
-// Stance: toes up at heel strike rolling down about the heel (tau < heel_rocker, pitch strike_pitch at tau 0),
-// flat on the footprint until the heel rises, then rolling about the ball (midtarsal) and, past the toes' limit,
-// about the toe tip; each pivot's ground contact stays put. tau is the fraction of stance done.
-AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant, float plant_heading, float tau,
-                      float scale, const GaitStyle& style, float* foot_pitch, float strike_pitch = 0.0f) {
-  const glm::quat h = yaw(plant_heading);
-  if (tau < style.heel_rocker) {
-    // Heel rocker: toes up at heel strike, rolling down about the heel's ground contact to foot flat. The toes
-    // follow the foot (no midtarsal bend), so the reported pitch is 0.
-    const float p = -strike_pitch * (1.0f - smoothstep01(tau / style.heel_rocker));
-    if (foot_pitch) *foot_pitch = 0.0f;
-    const glm::vec3 heel = plant + h * ((rig.heel_rest[leg] - rig.ankle_rest[leg]) * scale);
-    const glm::quat q = h * pitch(p);
-    return {heel + q * ((rig.ankle_rest[leg] - rig.heel_rest[leg]) * scale), q};
-  }
-  const float p = heel_rise_pitch(tau, style);
-  if (foot_pitch) *foot_pitch = p;
+// How much of a leg's straight reach the pelvis may use. A straight leg's length changes by only 1 - cos(b/2) as
+// its knee bends by b, so the fraction is a knee angle: 0.998 held the knee at 7.5 deg at the longest, 0.9999 at
+// 1.6 (the subject's terminal-stance knee is 4-5 deg, its heel-strike knee -2).
+constexpr float kReachUsed = 0.9999f;
+
+// The hip-ankle distance (humanoid units) the normative stance knee gives at tau, the fraction of stance done.
+float stance_target_reach(const LocomotionRig& rig, int leg, float tau) {
+  const float x = std::clamp(tau, 0.0f, 1.0f) * static_cast<float>(kStanceKnots - 1);
+  const std::size_t k = std::min(static_cast<std::size_t>(x), kStanceKnots - 2);
+  const float u = x - static_cast<float>(k);
+  return glm::mix(rig.stance_reach[leg][k], rig.stance_reach[leg][k + 1], u);
+}
+
+// The foot rolled heel-up by `p` (rad, >= 0) on its footprint: about the ball (midtarsal) and, past the toes'
+// limit, about the toe tip; each pivot's ground contact stays put.
+AnklePose rolled_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant, const glm::quat& h, float p,
+                      float scale) {
   glm::vec3 ball = plant + h * ((rig.ball_rest[leg] - rig.ankle_rest[leg]) * scale);
   const float over = p - rig.toe_limit;
   if (over > 0.0f) {
@@ -176,6 +173,59 @@ AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
   }
   const glm::quat q = h * pitch(p);
   return {ball + q * ((rig.ankle_rest[leg] - rig.ball_rest[leg]) * scale), q};
+}
+
+// Where the stance leg's hip will be (world, at the pelvis' highest height) and how far from it the ankle may be
+// (world units): the heel rises no later than this distance needs.
+struct HipHold {
+  glm::vec3 hip;
+  float reach;
+};
+
+// Stance: toes up at heel strike rolling down about the heel (tau < heel_rocker, pitch strike_pitch at tau 0),
+// flat on the footprint until the heel rises, then rolling about the ball (midtarsal) and, past the toes' limit,
+// about the toe tip; each pivot's ground contact stays put. tau is the fraction of stance done.
+// With `hold`, the heel rises as soon as, and as fast as, the body moving on over the foot needs it to keep the
+// ankle within hold->reach of the hip, and never later than heel_rise_pitch's schedule: as a person's heel comes
+// up when the leg is straight and the body goes on (Perry's third rocker), and with this walker's step and
+// speed. A schedule alone rose early for a slow step and late for a fast one, and the pelvis sank 3-5 cm
+// in terminal stance waiting for it (issue 21: the other leg's late-swing knee then 15-20 deg bent).
+AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant, float plant_heading, float tau,
+                      float scale, const GaitStyle& style, float* foot_pitch, float strike_pitch = 0.0f,
+                      const HipHold* hold = nullptr) {
+  const glm::quat h = yaw(plant_heading);
+  if (tau < style.heel_rocker) {
+    // Heel rocker: toes up at heel strike, rolling down about the heel's ground contact to foot flat. The toes
+    // follow the foot (no midtarsal bend), so the reported pitch is 0.
+    const float p = -strike_pitch * (1.0f - smoothstep01(tau / style.heel_rocker));
+    if (foot_pitch) *foot_pitch = 0.0f;
+    const glm::vec3 heel = plant + h * ((rig.heel_rest[leg] - rig.ankle_rest[leg]) * scale);
+    const glm::quat q = h * pitch(p);
+    return {heel + q * ((rig.ankle_rest[leg] - rig.heel_rest[leg]) * scale), q};
+  }
+  float p = heel_rise_pitch(tau, style);
+  AnklePose pose = rolled_pose(rig, leg, plant, h, p, scale);
+  if (hold && tau >= style.heel_hold_from && glm::dot(hold->hip - pose.position, h * glm::vec3(0.0f, 0.0f, 1.0f)) > 0.0f &&
+      glm::length(pose.position - hold->hip) > hold->reach) {
+    // Rolling lifts the ankle towards a hip ahead and above it; bisection on the pitch (the distance falls as
+    // it grows over the range used). Up to 1.3 rad (74 deg): a foot that would need more is left there, and
+    // the pelvis' own reach limit lowers it instead.
+    float lo = p, hi = 1.3f;
+    if (glm::length(rolled_pose(rig, leg, plant, h, hi, scale).position - hold->hip) > hold->reach) {
+      lo = hi;
+    } else {
+      for (int it = 0; it < 14; ++it) {
+        const float mid = 0.5f * (lo + hi);
+        if (glm::length(rolled_pose(rig, leg, plant, h, mid, scale).position - hold->hip) > hold->reach) lo = mid;
+        else hi = mid;
+      }
+      lo = hi;
+    }
+    p = lo;
+    pose = rolled_pose(rig, leg, plant, h, p, scale);
+  }
+  if (foot_pitch) *foot_pitch = p;
+  return pose;
 }
 
 struct WalkerFrame {
@@ -281,13 +331,14 @@ glm::vec3 hip_position(const LocomotionRig& rig, const PelvisMotion& motion, int
 // output for the per-frame value); 0 takes the plain minimum.
 // A leg whose `binds` is false (a swing foot far from landing) is left out.
 float reach_limit(const LocomotionRig& rig, const WalkerFrame& frame, const PelvisMotion& motion,
-                  const glm::vec3 ankle_world[2], float start, float smooth, const bool binds[2]) {
+                  const glm::vec3 ankle_world[2], float start, float smooth, const bool binds[2],
+                  const float* leg_reach = nullptr) {
   float dy = start;
   for (int leg = 0; leg < 2; ++leg) {
     if (!binds[leg]) continue;
     const glm::vec3 a = frame.to_humanoid(ankle_world[leg]);
     const glm::vec3 hip = hip_position(rig, motion, leg);
-    const float reach = 0.998f * rig.leg_reach[leg];
+    const float reach = leg_reach ? leg_reach[leg] : kReachUsed * rig.leg_reach[leg];
     const float dx = hip.x - a.x, dz = hip.z - a.z;
     const float limit = a.y + std::sqrt(std::max(reach * reach - dx * dx - dz * dz, 0.0f)) - hip.y;
     dy = smooth > 0.0f ? smooth_min(dy, limit, smooth) : std::min(dy, limit);
@@ -429,8 +480,6 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   GaitStyle walk_style = base_style;
   if (source.agents() && clock.track.speed_ratio < 1.0f)
     walk_style.toe_off_pitch *= std::max(clock.track.speed_ratio, 0.3f);
-  walk_style.pelvis_anterior_tilt +=
-      base_style.pelvis_tilt_per_cadence * std::max(clock.gp.cadence - base_style.pelvis_tilt_from_cadence, 0.0f);
   walk_style.heel_rise_end_slope *= smoothstep01((clock.gp.cadence - 90.0f) / 20.0f);
   const GaitStyle& style = walk_style;
   const GaitParameters& gp = clock.gp;
@@ -441,8 +490,107 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   const WalkerFrame frame{pelvis.position, pelvis.heading, scale};
   const float lead = footprint_lead(track, gp, style);
 
-  // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
+  // The pelvis' placement `ahead` seconds from now. Within the look-ahead window it is interpolated between now
+  // and the window's end: over the ~0.4 m it covers a lane's curvature moves it by under a millimetre, and one
+  // path evaluation instead of one per sample cut the system from 7 to ~4 us per walker.
+  const float window = 0.28f;  // of a cycle: short enough that a leg changes mode at most once
+  const float window_time = window * gp.cycle_time;
+  const Pose2 window_end = track.at(window_time);
+  float heading_change = window_end.heading - pelvis.heading;
+  heading_change -= kTwoPi * std::round(heading_change / kTwoPi);
+  auto pelvis_ahead = [&](float ahead) -> Pose2 {
+    if (ahead <= 0.0f) return pelvis;
+    if (ahead > window_time) return track.at(ahead);
+    const float u = ahead / window_time;
+    return {glm::mix(pelvis.position, window_end.position, u), pelvis.heading + u * heading_change};
+  };
   const float sf = gp.stance_fraction();
+  const float step_ratio = std::clamp(gp.step_length * track.speed_ratio / (0.7f * scale), 0.5f, 1.0f);
+  const float strike_pitch = style.heel_strike_pitch * step_ratio * step_ratio;
+  // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
+  // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
+  // swinging leg lands on its target. Arcs are built once per frame.
+  // The swing ankle: a Cardinal spline in time through knots placed by the normative swing's joint angles on
+  // this walker's legs (kSwingHipDeg...). Along the step each knot sits where the ankle is, relative to a hip
+  // moving on at walking pace, as a fraction of the way from toe-off to heel strike; upwards, at the height the
+  // leg's angles lift it above that line. The foot's pitch is the normative shin angle less the ankle's
+  // dorsiflexion, eased from the toe-off pitch over the first 20 % (over 40 %, the ankle stayed 5 deg more
+  // plantarflexed through early swing) and into the heel-strike pitch over the last 40 %, so both ends join the
+  // stance rockers exactly. It lands on the heel-strike pose (toes up), not on the flat footprint.
+  struct Swing {
+    glm::vec4 knots[kSwingKnots];  // ankle position (world) and foot pitch (rad, toes down) at each knot
+    glm::quat from_yaw, to_yaw;
+    AnklePose at(float sigma) const {
+      const glm::vec4 k = cardinal_through(knots, sigma);
+      const glm::quat heading = glm::slerp(from_yaw, to_yaw, smoothstep01((sigma - 0.25f) / 0.6f));
+      return {glm::vec3(k), heading * pitch(k.w)};
+    }
+  };
+  auto make_swing = [&](int leg, const glm::vec3& from, float from_heading, float from_pitch, const glm::vec3& to,
+                        float to_heading) {
+    const AnklePose strike = stance_pose(rig, leg, to, to_heading, 0.0f, scale, style, nullptr, strike_pitch);
+    const glm::vec3 chord = strike.position - from;
+    float forward[kSwingKnots], up[kSwingKnots], shin_pitch[kSwingKnots];
+    for (std::size_t k = 0; k < kSwingKnots; ++k) {
+      // The subject's angles are a gait lab's; the rig's rotations are from its rest pose (LocomotionRig::rest_*).
+      // Hip flexion is measured against the pelvis: the thigh's own turn is the hip's less the pelvis' forward tilt.
+      const float thigh = glm::radians(kSwingHipDeg[k]) - rig.rest_hip_flexion - style.pelvis_anterior_tilt;
+      const float knee = glm::radians(kSwingKneeDeg[k]) - rig.rest_knee_flexion;
+      const glm::vec3 rel = pitch(-thigh) * rig.swing_leg[leg][k] * scale;
+      forward[k] = rel.z, up[k] = rel.y;
+      shin_pitch[k] = knee - thigh - (glm::radians(kSwingAnkleDeg[k]) - rig.rest_ankle_dorsiflexion);
+    }
+    // The hip covers the rest of the step: a short or stopping step keeps the legs' own motion.
+    const float step = std::sqrt(chord.x * chord.x + chord.z * chord.z);
+    const float hip_travel = std::max(step - (forward[kSwingKnots - 1] - forward[0]), 0.0f);
+    const float along_last = hip_travel + forward[kSwingKnots - 1] - forward[0];
+    const float pitch_from = from_pitch - shin_pitch[0];
+    const float pitch_to = -strike_pitch - shin_pitch[kSwingKnots - 1];
+    // The sole's ground level at both ends: under the toe tip at toe-off, under the landing footprint.
+    const glm::vec3 tip_offset = (rig.tip_rest[leg] - rig.ankle_rest[leg]) * scale;
+    const glm::vec3 heel_offset = (rig.heel_rest[leg] - rig.ankle_rest[leg]) * scale;
+    const float ground_from = (from + yaw(from_heading) * pitch(from_pitch) * tip_offset).y;
+    const float ground_to = to.y + tip_offset.y;
+    Swing s;
+    for (std::size_t k = 0; k < kSwingKnots; ++k) {
+      const float sigma = static_cast<float>(k) / static_cast<float>(kSwingKnots - 1);
+      const float f = along_last > 1e-4f ? (hip_travel * sigma + forward[k] - forward[0]) / along_last : sigma;
+      const float lift = up[k] - glm::mix(up[0], up[kSwingKnots - 1], f);
+      const float p = shin_pitch[k] + pitch_from * (1.0f - smoothstep01(sigma / 0.2f)) +
+                      pitch_to * smoothstep01((sigma - 0.6f) / 0.4f);
+      glm::vec3 ankle = from + chord * f + kUp * lift;
+      if (sigma > 0.2f && sigma < 0.8f) {
+        // Clearance: the leg's angles are a person's, its lengths and the pelvis height are this walker's, so a
+        // toe or heel may come out lower than the subject's 1-2 cm; such a knot in the middle of the swing is
+        // raised until both clear the ground by swing_clearance. Guarding the knots at 12.5 and 87.5 % too
+        // lifted the landing heel and left the knee 20 deg bent at 96 % of the cycle (subject: 3).
+        const glm::quat q = glm::slerp(yaw(from_heading), yaw(to_heading), f) * pitch(p);
+        const float sole = std::min((ankle + q * tip_offset).y, (ankle + q * heel_offset).y);
+        ankle.y += std::max(glm::mix(ground_from, ground_to, f) + style.swing_clearance * scale - sole, 0.0f);
+      }
+      s.knots[k] = glm::vec4(ankle, p);
+    }
+    s.knots[0] = glm::vec4(from, from_pitch);
+    s.knots[kSwingKnots - 1] = glm::vec4(strike.position, -strike_pitch);
+    s.from_yaw = yaw(from_heading);
+    s.to_yaw = yaw(to_heading);
+    return s;
+  };
+  // A stance leg's hip `ahead` seconds from now at the pelvis' highest height, and the hip-ankle distance its
+  // knee angle at tau gives (stance_pose's heel rise keeps to it).
+  auto hip_hold = [&](int leg, float ahead, float tau) -> HipHold {
+    const Pose2 p = pelvis_ahead(ahead);
+    const glm::vec3 hip = hip_position(rig, pelvis_motion(style, frac(phase + ahead / gp.cycle_time)), leg) +
+                          glm::vec3(0.0f, style.heel_hold_height, 0.0f);
+    return {p.position + yaw(p.heading) * (hip * scale), stance_target_reach(rig, leg, tau) * scale};
+  };
+  // The same for the pelvis as placed now (root translation `root`, moving as `m`).
+  auto hip_hold_now = [&](int leg, const glm::vec3& root, const PelvisMotion& m, float tau) -> HipHold {
+    const glm::vec3 hip = root + (hip_position(rig, m, leg) - glm::vec3(m.sway, 0.0f, 0.0f));
+    return {pelvis.position + yaw(pelvis.heading) * (hip * scale), stance_target_reach(rig, leg, tau) * scale};
+  };
+
+  // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
   AnklePose ankle[2];
   float toe_pitch[2] = {0.0f, 0.0f};
   for (int leg = 0; leg < 2; ++leg) {
@@ -456,7 +604,13 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // Toe-off: leave from the rolled stance pose; aim where the pelvis will be at heel strike plus the lead.
       const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
       float p = 0.0f;
-      const AnklePose from = stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), 1.0f, scale, style, &p);
+      // It leaves from the pose the foot had: its heel rose for the pelvis as last placed (see the end of this
+      // function), so the swing starts where the foot is.
+      const glm::vec3 last_root{lanes.root_translation.at(0, i), lanes.root_translation.at(1, i),
+                                lanes.root_translation.at(2, i)};
+      const HipHold hold = hip_hold_now(leg, last_root, pelvis_motion(style, phase), 1.0f);
+      const AnklePose from =
+          stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), 1.0f, scale, style, &p, 0.0f, &hold);
       const float strike_in = (1.0f - psi) * gp.cycle_time;
       const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
       begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
@@ -530,76 +684,6 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       g.leg(leg, kLegPlantHeading) = turned;
     }
   }
-  const float step_ratio = std::clamp(gp.step_length * track.speed_ratio / (0.7f * scale), 0.5f, 1.0f);
-  const float strike_pitch = style.heel_strike_pitch * step_ratio * step_ratio;
-  // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
-  // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
-  // swinging leg lands on its target. Arcs are built once per frame.
-  // The swing ankle: a Cardinal spline in time through knots placed by the normative swing's joint angles on
-  // this walker's legs (kSwingHipDeg...). Along the step each knot sits where the ankle is, relative to a hip
-  // moving on at walking pace, as a fraction of the way from toe-off to heel strike; upwards, at the height the
-  // leg's angles lift it above that line. The foot's pitch is the normative shin angle less the ankle's
-  // dorsiflexion, eased from the toe-off pitch over the first 20 % (over 40 %, the ankle stayed 5 deg more
-  // plantarflexed through early swing) and into the heel-strike pitch over the last 40 %, so both ends join the
-  // stance rockers exactly. It lands on the heel-strike pose (toes up), not on the flat footprint.
-  struct Swing {
-    glm::vec4 knots[kSwingKnots];  // ankle position (world) and foot pitch (rad, toes down) at each knot
-    glm::quat from_yaw, to_yaw;
-    AnklePose at(float sigma) const {
-      const glm::vec4 k = cardinal_through(knots, sigma);
-      const glm::quat heading = glm::slerp(from_yaw, to_yaw, smoothstep01((sigma - 0.25f) / 0.6f));
-      return {glm::vec3(k), heading * pitch(k.w)};
-    }
-  };
-  auto make_swing = [&](int leg, const glm::vec3& from, float from_heading, float from_pitch, const glm::vec3& to,
-                        float to_heading) {
-    const AnklePose strike = stance_pose(rig, leg, to, to_heading, 0.0f, scale, style, nullptr, strike_pitch);
-    const glm::vec3 chord = strike.position - from;
-    float forward[kSwingKnots], up[kSwingKnots], shin_pitch[kSwingKnots];
-    for (std::size_t k = 0; k < kSwingKnots; ++k) {
-      // Hip flexion is measured against the pelvis: the thigh's own angle is the hip's less the pelvis' forward tilt.
-      const float thigh = glm::radians(kSwingHipDeg[k]) - style.pelvis_anterior_tilt;
-      const float knee = glm::radians(kSwingKneeDeg[k]);
-      const glm::vec3 rel = pitch(-thigh) * rig.swing_leg[leg][k] * scale;
-      forward[k] = rel.z, up[k] = rel.y;
-      shin_pitch[k] = knee - thigh - glm::radians(kSwingAnkleDeg[k]);
-    }
-    // The hip covers the rest of the step: a short or stopping step keeps the legs' own motion.
-    const float step = std::sqrt(chord.x * chord.x + chord.z * chord.z);
-    const float hip_travel = std::max(step - (forward[kSwingKnots - 1] - forward[0]), 0.0f);
-    const float along_last = hip_travel + forward[kSwingKnots - 1] - forward[0];
-    const float pitch_from = from_pitch - shin_pitch[0];
-    const float pitch_to = -strike_pitch - shin_pitch[kSwingKnots - 1];
-    // The sole's ground level at both ends: under the toe tip at toe-off, under the landing footprint.
-    const glm::vec3 tip_offset = (rig.tip_rest[leg] - rig.ankle_rest[leg]) * scale;
-    const glm::vec3 heel_offset = (rig.heel_rest[leg] - rig.ankle_rest[leg]) * scale;
-    const float ground_from = (from + yaw(from_heading) * pitch(from_pitch) * tip_offset).y;
-    const float ground_to = to.y + tip_offset.y;
-    Swing s;
-    for (std::size_t k = 0; k < kSwingKnots; ++k) {
-      const float sigma = static_cast<float>(k) / static_cast<float>(kSwingKnots - 1);
-      const float f = along_last > 1e-4f ? (hip_travel * sigma + forward[k] - forward[0]) / along_last : sigma;
-      const float lift = up[k] - glm::mix(up[0], up[kSwingKnots - 1], f);
-      const float p = shin_pitch[k] + pitch_from * (1.0f - smoothstep01(sigma / 0.2f)) +
-                      pitch_to * smoothstep01((sigma - 0.6f) / 0.4f);
-      glm::vec3 ankle = from + chord * f + kUp * lift;
-      if (sigma > 0.2f && sigma < 0.8f) {
-        // Clearance: the leg's angles are a person's, its lengths and the pelvis height are this walker's, so a
-        // toe or heel may come out lower than the subject's 1-2 cm; such a knot in the middle of the swing is
-        // raised until both clear the ground by swing_clearance. Guarding the knots at 12.5 and 87.5 % too
-        // lifted the landing heel and left the knee 20 deg bent at 96 % of the cycle (subject: 3).
-        const glm::quat q = glm::slerp(yaw(from_heading), yaw(to_heading), f) * pitch(p);
-        const float sole = std::min((ankle + q * tip_offset).y, (ankle + q * heel_offset).y);
-        ankle.y += std::max(glm::mix(ground_from, ground_to, f) + style.swing_clearance * scale - sole, 0.0f);
-      }
-      s.knots[k] = glm::vec4(ankle, p);
-    }
-    s.knots[0] = glm::vec4(from, from_pitch);
-    s.knots[kSwingKnots - 1] = glm::vec4(strike.position, -strike_pitch);
-    s.from_yaw = yaw(from_heading);
-    s.to_yaw = yaw(to_heading);
-    return s;
-  };
   struct LegPath {
     bool swinging;
     float psi;
@@ -620,7 +704,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       lp.plant = {g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
       lp.plant_heading = g.leg(leg, kLegPlantHeading);
       float p = 0.0f;
-      const AnklePose from = stance_pose(rig, leg, lp.plant, lp.plant_heading, 1.0f, scale, style, &p);
+      const HipHold hold = hip_hold(leg, std::max(sf - lp.psi, 0.0f) * gp.cycle_time, 1.0f);
+      const AnklePose from = stance_pose(rig, leg, lp.plant, lp.plant_heading, 1.0f, scale, style, &p, 0.0f, &hold);
       const float strike_in = (std::max(sf - lp.psi, 0.0f) + 1.0f - sf) * gp.cycle_time;
       const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
       lp.swing = make_swing(leg, from.position, lp.plant_heading, p, to.position, to.heading);
@@ -629,22 +714,29 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   // `ahead` in seconds, at most ~0.3 cycle so a leg changes mode at most once.
   // `binds` (optional): whether the leg's reach holds the pelvis down, false for a swing foot between
   // kSwingFreeFrom and kSwingBindsFrom of its swing.
-  auto ankle_at = [&](int leg, float ahead, float* foot_pitch, bool* binds = nullptr) -> AnklePose {
+  auto ankle_at = [&](int leg, float ahead, float* foot_pitch, bool* binds = nullptr,
+                      float* reach = nullptr) -> AnklePose {
     const LegPath& lp = legs[leg];
     const float psi = lp.psi + ahead / gp.cycle_time;  // not wrapped: > 1 means past the next heel strike
     if (foot_pitch) *foot_pitch = 0.0f;
     const bool in_swing = lp.swinging ? psi < 1.0f : psi >= sf;
     if (binds) *binds = true;
+    if (reach) *reach = kReachUsed * rig.leg_reach[leg];
     if (!in_swing) {
       const float tau = std::min((lp.swinging ? psi - 1.0f : psi) / sf, 1.0f);
-      return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch, strike_pitch);
+      // Through loading response and mid-stance the pelvis holds the stance knee at the subject's angle; later
+      // the heel rise does (stance_pose), and the pelvis is held only by the straight leg.
+      if (reach && tau < style.stance_knee_until) *reach = std::min(*reach, stance_target_reach(rig, leg, tau));
+      const HipHold hold = hip_hold(leg, ahead, tau);
+      return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch, strike_pitch, &hold);
     }
     const float sigma = sf < 1.0f ? std::clamp((psi - sf) / (1.0f - sf), 0.0f, 1.0f) : 1.0f;
     if (binds) *binds = sigma < kSwingFreeFrom || sigma >= kSwingBindsFrom;
     return lp.swing->at(sigma);
   };
   bool binds[2] = {true, true};
-  for (int leg = 0; leg < 2; ++leg) ankle[leg] = ankle_at(leg, 0.0f, &toe_pitch[leg], &binds[leg]);
+  float reach_now[2];
+  for (int leg = 0; leg < 2; ++leg) ankle[leg] = ankle_at(leg, 0.0f, &toe_pitch[leg], &binds[leg], &reach_now[leg]);
   if (settle > 0.0f) {
     // Standing: each foot rolls from its place in stance at the held phase to flat on its footprint (a trailing
     // heel comes down about the ball, a landing forefoot rolls down about the heel), so the stance has both soles
@@ -668,10 +760,10 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   const PelvisMotion motion = pelvis_motion(style, phase, 1.0f - settle,
                                             settle * style.idle_sway * std::sin(kTwoPi * lanes.time.at(0, i) /
                                                                                 style.idle_sway_period));
-  glm::vec3 root_translation{motion.sway, -style.nominal_drop, 0.0f};
+  glm::vec3 root_translation{motion.sway, style.pelvis_rise_max, 0.0f};
   const glm::vec3 ankle_world[2] = {ankle[0].position, ankle[1].position};
   if (settle > 0.0f) binds[0] = binds[1] = true;
-  const float now_limit = reach_limit(rig, frame, motion, ankle_world, 1e9f, 0.0f, binds);
+  const float now_limit = reach_limit(rig, frame, motion, ankle_world, 1e9f, 0.0f, binds, reach_now);
   const float curvature = style.bob_curvature / scale;  // humanoid units
   g[kGaitDipAge] += dt;
   if (now_limit <= g[kGaitDipHeight] + curvature * g[kGaitDipAge] * g[kGaitDipAge]) {
@@ -680,16 +772,11 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   }
   // Samples sit on a fixed grid of gait phase, not at fixed offsets from now: a narrow dip then lands on the
   // same samples frame after frame instead of flickering between them (offset samples made 4 mm jumps).
-  float future = 1e9f;
+  float future = 1e9f, future_ahead = 0.0f;
   constexpr float kSamplesPerCycle = 48.0f;
-  const float window = 0.28f;  // of a cycle: short enough that a leg changes mode at most once
   // The pelvis' future placement is interpolated between now and the window's end: over the ~0.4 m it covers
   // a lane's curvature moves it by under a millimetre, and one path evaluation instead of one per sample cut
   // the system from 7 to ~4 us per walker. The final min with the exact current limit keeps reach guaranteed.
-  const float window_time = window * gp.cycle_time;
-  const Pose2 window_end = track.at(window_time);
-  float heading_change = window_end.heading - pelvis.heading;
-  heading_change -= kTwoPi * std::round(heading_change / kTwoPi);
   // A standing walker's feet do not move: the reach now binds, nothing ahead (the walk's poses ahead would be
   // those of a held phase).
   for (float grid = std::floor(phase * kSamplesPerCycle) + 1.0f; settle <= 0.0f; grid += 1.0f) {
@@ -697,19 +784,25 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     if (ahead_cycles > window) break;
     const float ahead = ahead_cycles * gp.cycle_time;
     const float at_phase = frac(phase + ahead_cycles);
-    const float u = ahead / window_time;
-    const Pose2 there{glm::mix(pelvis.position, window_end.position, u), pelvis.heading + u * heading_change};
+    const Pose2 there = pelvis_ahead(ahead);
     bool binds_there[2];
-    const glm::vec3 feet[2] = {ankle_at(0, ahead, nullptr, &binds_there[0]).position,
-                               ankle_at(1, ahead, nullptr, &binds_there[1]).position};
+    float reach_there[2];
+    const glm::vec3 feet[2] = {ankle_at(0, ahead, nullptr, &binds_there[0], &reach_there[0]).position,
+                               ankle_at(1, ahead, nullptr, &binds_there[1], &reach_there[1]).position};
     const float limit = reach_limit(rig, WalkerFrame{there.position, there.heading, scale},
-                                    pelvis_motion(style, at_phase), feet, 1e9f, 0.0f, binds_there);
-    future = std::min(future, limit + curvature * ahead * ahead);
+                                    pelvis_motion(style, at_phase), feet, 1e9f, 0.0f, binds_there, reach_there);
+    const float bound = limit + curvature * ahead * ahead;
+    if (bound < future) future = bound, future_ahead = ahead;
   }
   const float past = g[kGaitDipHeight] + curvature * g[kGaitDipAge] * g[kGaitDipAge];
   // Blended, not a plain min: where the rising parabola of the last dip meets the falling one of the next, a
   // plain min leaves a corner (an 8 mm/frame change of vertical speed at 60 fps).
-  const float envelope = smooth_min(past, future, 0.025f);
+  // The corner where the rising parabola of the last dip meets the falling one of the next is rounded in
+  // proportion to it: their slopes differ by 2 c (age + ahead), and a blend of width c (age + ahead)^2 turns it
+  // at the same curvature. A fixed 2.5 cm blend also lowered the pelvis 6 mm wherever the two coincide (the
+  // binding limit now and just ahead, at every mid-stance), which bent the stance knee 10 deg.
+  const float span = g[kGaitDipAge] + future_ahead;
+  const float envelope = smooth_min(past, future, std::clamp(curvature * span * span, 0.002f, 0.025f));
   root_translation.y = std::min(smooth_min(root_translation.y, envelope, 0.03f), now_limit);
   // Loading response: after each heel strike the pelvis sinks a little further as the stance knee yields
   // (~15-20 deg at 15 % of the cycle), a smooth bump subtracted after the reach limits, so it only ever shortens
@@ -726,6 +819,20 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   lanes.root_translation.at(1, i) = root_translation.y;
   lanes.root_translation.at(2, i) = root_translation.z;
 
+  if (settle <= 0.0f) {
+    // The stance heels rise for the pelvis as now placed, which the other leg's reach and the bob may hold lower
+    // than the height the look-ahead assumed (heel_hold_height): the trailing knee then stays at the subject's
+    // angle in double support instead of bending 15-25 deg while the pelvis comes down for the heel strike
+    // (issue 21). The foot only rolls further about its own contacts, so it neither slides nor moves away
+    // from the hip: the reach the pelvis was placed for still holds.
+    for (int leg = 0; leg < 2; ++leg) {
+      if (legs[leg].swinging) continue;
+      const float tau = std::min(legs[leg].psi / sf, 1.0f);
+      const HipHold hold = hip_hold_now(leg, root_translation, motion, tau);
+      ankle[leg] = stance_pose(rig, leg, legs[leg].plant, legs[leg].plant_heading, tau, scale, style, &toe_pitch[leg],
+                               strike_pitch, &hold);
+    }
+  }
   // ---- Rotations the IK does not own: root, pelvis, spine counter-rotation, toes ---------------------------
   write_quat(lanes, rig.root, i, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
   write_quat(lanes, rig.sacroiliac, i, motion.sacro);
@@ -742,7 +849,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // rather than the pelvis dropping for it (which made 1 cm/frame^2 jolts when the cadence changed).
       const glm::vec3 hip = root_translation + (hip_position(rig, motion, leg) - glm::vec3(motion.sway, 0.0f, 0.0f));
       const glm::vec3 reach = goal - hip;
-      const float most = 0.998f * rig.leg_reach[leg], length = glm::length(reach);
+      const float most = kReachUsed * rig.leg_reach[leg], length = glm::length(reach);
       if (length > most) goal = hip + reach * (most / length);
     }
     write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, goal, frame.to_humanoid(ankle[leg].orientation),
@@ -836,8 +943,20 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
       reach = std::max(reach, glm::length(thigh + glm::angleAxis(theta, limb.flexion_axis) * shin));
     }
     rig.leg_reach[leg] = reach;
+    if (leg == 0) {
+      // Sagittal angles (about +X) from the straight-down direction: a positive one swings a hanging segment back.
+      auto back_from_down = [](const glm::vec3& v) { return std::atan2(-v.z, -v.y); };
+      rig.rest_hip_flexion = -back_from_down(thigh);
+      rig.rest_knee_flexion = back_from_down(shin) - back_from_down(thigh);
+      rig.rest_ankle_dorsiflexion = back_from_down(shin);
+    }
     for (std::size_t k = 0; k < kSwingKnots; ++k)
-      rig.swing_leg[leg][k] = thigh + pitch(glm::radians(kSwingKneeDeg[k])) * shin;
+      rig.swing_leg[leg][k] = thigh + pitch(glm::radians(kSwingKneeDeg[k]) - rig.rest_knee_flexion) * shin;
+    for (std::size_t k = 0; k < kStanceKnots; ++k) {
+      // The subject's heel strike is 2 deg hyperextended; a hinge bent either way is as long, so read it as 1 deg.
+      const float knee = glm::radians(std::max(kStanceKneeDeg[k], 1.0f)) - rig.rest_knee_flexion;
+      rig.stance_reach[leg][k] = std::min(glm::length(thigh + pitch(knee) * shin), reach);
+    }
   }
   const JointLimits& toe = skeleton.limits[rig.ball[0]];
   rig.toe_limit = toe.present ? std::max(-toe.lower.x, 0.0f) : 0.6f;
@@ -970,8 +1089,15 @@ bool StartWalkingJob::run() const {
     const Pose2 plant = footprint(rig, track.at(ago, lead), leg, scale);
     plant_foot(g, leg, plant.position, plant.heading, track.distance_at(ago, lead));
     if (psi >= sf && !standing) {
+      // The swing left (psi - sf) cycles ago, from the foot rolled for the hip then (at its highest height: the
+      // walk's look-ahead assumes the same, see walk_one's hip_hold).
+      const float since = (psi - sf) * gp.cycle_time;
+      const Pose2 then = track.at(-since);
+      const glm::vec3 hip = hip_position(rig, pelvis_motion(style, frac(g[kGaitPhase] - (psi - sf))), leg) +
+                            glm::vec3(0.0f, style.heel_hold_height, 0.0f);
+      const HipHold hold{then.position + yaw(then.heading) * (hip * scale), stance_target_reach(rig, leg, 1.0f) * scale};
       float p = 0.0f;
-      const AnklePose from = stance_pose(rig, leg, plant.position, plant.heading, 1.0f, scale, style, &p);
+      const AnklePose from = stance_pose(rig, leg, plant.position, plant.heading, 1.0f, scale, style, &p, 0.0f, &hold);
       const float strike_in = (1.0f - psi) * gp.cycle_time;
       const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
       begin_swing(g, leg, from.position, plant.heading, p, to.position, to.heading, track.distance_at(strike_in, lead));

@@ -6,14 +6,16 @@
 // counter-rotation). Gait formulas: motion/gait.h; maths: ../shared/notes/tech-brief.md section 3.
 //
 // Gait determinants modelled: pelvis forward travel along the path; vertical oscillation, two bumps per stride,
-// lowest in double support (the pelvis is as high as both stance legs can reach, capped by a nominal height, so
-// knees flex as much as the step needs and never more), plus a small loading-response drop after each heel
-// strike; lateral sway towards the stance leg; pelvic rotation about the vertical (+-4 deg) and tilt (list, the
-// swing side drops +-4 deg, and a forward tilt growing with cadence); stance with three rockers: heel strike toes
-// up rolling down about the heel, a flat foot, then a heel rise onto the ball (the midtarsal joint keeping the
-// toes on the ground) and, once the toes bend no further, about the toe tip; a swing whose ankle and foot follow
-// a normative swing's joint angles (kSwingHipDeg...) on the walker's own legs, clearing the ground; arms swung
-// about the hanging pose. Joint-angle curves against a normative walk: systems/gait_metrics.h GaitCycleRecorder.
+// lowest in double support (the pelvis is as high as both legs reach with the stance knee at a normative walk's
+// stance angles, kStanceKneeDeg, through loading response and mid-stance, so the knee yields and re-extends as a
+// person's), plus a small loading-response drop after each heel strike; lateral sway towards the stance leg;
+// pelvic rotation about the vertical (+-4 deg) and tilt (list, the swing side drops +-4 deg, and the subject's
+// backward tilt); stance with three rockers: heel strike toes up rolling down about the heel, a flat foot, then a
+// heel rise onto the ball (the midtarsal joint keeping the toes on the ground) and, once the toes bend no further,
+// about the toe tip, as soon as the hip moving on needs it to keep the stance knee at the normative angle; a
+// swing whose ankle and foot follow a normative swing's joint angles (kSwingHipDeg...) on the walker's own legs,
+// clearing the ground; arms swung about the hanging pose. Joint-angle curves against a normative walk:
+// systems/gait_metrics.h GaitCycleRecorder.
 //
 // Cadence may change at any time: phase and distance integrate it, footprints are placed once at toe-off, so a
 // change never moves a planted foot or pops the pelvis.
@@ -47,50 +49,60 @@ struct GaitStyle {
   float pelvis_yaw = 0.07f;          // pelvic rotation amplitude about the vertical (~4 deg)
   float pelvis_tilt = 0.07f;         // pelvic list amplitude (~4 deg), swing side down
   float lateral_sway = 0.022f;       // pelvis shift towards the stance leg
-  // Pelvic tilt (forward positive) at a comfortable cadence. Hip flexion is measured against the pelvis: the
-  // OpenSim subject's pelvis tilts 3.6-6.2 deg backwards (pelvis_tilt), and with the earlier 0.15 forward every
-  // hip angle read ~13 deg more flexed than the subject's (hip RMS 12.8 -> 4.2 deg with -0.08).
-  float pelvis_anterior_tilt = -0.08f;
-  // The tilt grows forward with cadence above pelvis_tilt_from_cadence (rad per step/min), as a faster walker's
-  // pelvis does: the longer stride otherwise extends the trailing hip past its 28.6 deg limit (measured -33 deg at
-  // 1.8 m/s with a constant tilt; with the growth -24, 0 limit violations in the gait report).
-  float pelvis_tilt_per_cadence = 0.0055f;
-  float pelvis_tilt_from_cadence = 98.0f;
-  // Pelvis below its rest height at mid-stance: 3 mm leaves the stance knee ~5 deg flexed there (0.02 gave 25).
-  float nominal_drop = 0.003f;
-  // Extra pelvis drop in loading response, over loading_window of a cycle after each heel strike: the stance knee
-  // yields 21 deg (subject 23, Perry 15-20). Measured at 1.2 m/s: 0.012 over 0.3 gave a 13 deg yield (knee RMS
-  // against the subject 7.3 deg with the rest as now); 0.025 / 0.3 19 deg (6.7); 0.03 / 0.35 21 deg (5.9). 0.04 /
-  // 0.35 gave 25 deg, RMS 5.6 and a 2.7 cm pelvis excursion, but the pelvis then jolted 1.26x harder in a cadence
-  // change than in steady walking (Locomotion.CadenceChangesWithoutPop allows 1.25x).
-  float loading_dip = 0.03f;
-  float loading_window = 0.35f;
+  // Pelvic tilt (forward positive). Hip flexion is measured against the pelvis, and the OpenSim subject's pelvis
+  // tilts 3.6-6.2 deg backwards (pelvis_tilt, +Z like hip flexion; mean 4.7): with it the walker's thighs swing
+  // through the subject's world angles when its hips read the subject's. Rejected: a tilt growing forward with
+  // cadence (0.0055 rad per step/min above 98), needed when the bent rest knee pushed the trailing hip to its
+  // limit at 1.8 m/s; with the straight leg it only flexed the fast walkers' hips to 40-45 deg.
+  float pelvis_anterior_tilt = -0.082f;
+  // The pelvis' highest height above rest (m), where the legs reach: the default rest leg leans 5 deg with the ankle
+  // behind the hip, so a straight leg under the hip reaches a few millimetres higher than rest.
+  float pelvis_rise_max = 0.01f;
+  // The pelvis holds the stance knee at the subject's stance angles (kStanceKneeDeg, its loading response
+  // included) through this fraction of the stance; later the heel rise keeps it there (heel_hold_from).
+  float stance_knee_until = 0.75f;
+  // A little extra pelvis drop after each heel strike, over loading_window of a cycle: it deepens the loading
+  // response the stance angles give by ~3 deg (the subject's, 23 deg, was 20 with none). Before the stance
+  // angles held the knee, 0.03 over 0.35 of a cycle made that yield alone.
+  float loading_dip = 0.0075f;
+  float loading_window = 0.25f;
   // The pelvis height follows parabolas of this curvature (m/s^2) through the lowest heights the last and the
   // next heel strike allow, so the bob is smooth; hard reach limits alone gave ~1 cm/frame kinks.
-  float bob_curvature = 1.8f;  // 1.0 kept the pelvis ~4 cm low through mid-stance (knee 25-30 deg)
+  // 1.0 kept the pelvis ~4 cm low through mid-stance (knee 25-30 deg); 4-15 followed the legs' limits closer
+  // (knee RMS 0.5-1 deg lower) but shook the pelvis 1.5x harder in steady walking.
+  float bob_curvature = 1.8f;
   // Footprint placed this many step lengths ahead of the pelvis at heel strike. With the heel rise below it
   // balances the leading leg at heel strike against the trailing one at toe-off: measured pelvis bob peak to
   // peak 2.2 / 5.9 / 10.7 cm at 0.8 / 1.2 / 1.6 m/s (0.5 gave 10 cm and 0.65 gave 7.8 cm at 1.2 m/s).
-  // Now 0.5 with the heel and toe rockers (issue 21): 0.6 put the foot 0.35 m ahead of the hip at heel strike, a
-  // 7 cm dip and the hip flexed 40 deg.
-  float footprint_lead = 0.5f;
-  float heel_off = 0.55f;            // fraction of stance at which the heel starts to rise (~35 % of the cycle)
+  // Now 0.53 with the heel and toe rockers and the straight rest leg (issue 21; searched with the stance values
+  // below, 0.5-0.56): 0.6 put the foot 0.35 m ahead of the hip at heel strike, a 7 cm dip and the hip flexed 40 deg.
+  float footprint_lead = 0.53f;
+  // Fraction of stance at which the heel starts to rise at the latest (~37 % of the cycle); it rises sooner when
+  // the body's progress needs it (heel_hold_from).
+  float heel_off = 0.59f;
+  // From this fraction of stance (~28 % of the cycle) the heel rises as soon and as fast as the hip moving on ahead
+  // needs to keep the stance knee at the subject's angle (systems/locomotion.cpp stance_pose), for the pelvis
+  // as placed; the look-ahead assumes the pelvis heel_hold_height above rest. A schedule alone (heel_off and the
+  // pitch curve below) left the trailing knee bent 15-35 deg in terminal stance, where the subject's is 4-7.
+  float heel_hold_from = 0.45f;
+  float heel_hold_height = 0.005f;
   // Heel strike: the foot lands toes up by heel_strike_pitch and rolls down about its heel until foot flat at
   // heel_rocker of the stance (~8 % of the cycle), so the ankle is near neutral at heel strike as in a gait lab;
-  // a foot landing flat left the ankle ~15 deg plantarflexed under a shin still leaning back.
-  float heel_strike_pitch = 0.38f;
-  float heel_rocker = 0.13f;
+  // a foot landing flat left the ankle ~15 deg plantarflexed under a shin still leaning back. 0.36 (21 deg) lands
+  // it 5 deg dorsiflexed at 1.2 m/s (0.44: 10; the subject 1).
+  float heel_strike_pitch = 0.36f;
+  float heel_rocker = 0.115f;
 
-  // Foot pitch at toe-off (~63 deg): about the ball until the toes bend no further (LocomotionRig::toe_limit),
-  // then about the toe tip.
-  float toe_off_pitch = 1.1f;
+  // Foot pitch at toe-off by the schedule (~57 deg, the subject's): about the ball until the toes bend no further
+  // (LocomotionRig::toe_limit), then about the toe tip. The heel hold may roll it further.
+  float toe_off_pitch = 1.0f;
   // How fast the heel still rises at toe-off, as a fraction of the rise's mean rate. 0 (smoothstep) eased the foot
   // to rest just as the swing snatched it up, so the trailing leg's reach made a sharp dip right at toe-off that
   // the pelvis could not anticipate when the cadence changed (1.7 cm/frame^2 jolts); 0.85 rounds it (and the
   // subject's foot turns fastest there too: ankle RMS 11.6 -> 10.5 deg). It applies in full from 110 steps/min
   // and fades out below 90: a slow walker's heel then rose too late, the pelvis sank in double support and the
-  // knee landed 11 deg bent at 0.8 m/s (3 deg without).
-  float heel_rise_end_slope = 0.85f;
+  // knee landed 11 deg bent at 0.8 m/s (3 deg without). 0.7 with the heel hold.
+  float heel_rise_end_slope = 0.7f;
   // The swing follows the normative swing's joint angles (kSwingHipDeg... below); its knots in
   // the middle of the swing are raised where the toe tip or heel would pass lower than this above the ground
   // (swing_clearance_min_mm in the gait report: 13 mm with 0.025; 0.035 gave 21 mm but folded the knee 2 deg
@@ -147,6 +159,14 @@ inline constexpr float kSwingHipDeg[kSwingKnots] = {-15.76f, -5.25f, 4.07f, 12.1
 inline constexpr float kSwingKneeDeg[kSwingKnots] = {34.69f, 55.23f, 67.25f, 69.08f, 61.99f, 46.58f, 25.40f, 5.51f, -2.15f};
 inline constexpr float kSwingAnkleDeg[kSwingKnots] = {5.21f, -8.43f, -4.97f, 0.52f, 0.28f, 0.87f, -1.67f, -3.20f, -2.03f};
 
+// The stance knee of the same walk, kStanceKnots samples evenly spaced in time from its heel strike to its toe-off
+// (degrees). The pelvis is held where the stance leg's hip-ankle distance is the one this knee angle gives on
+// the walker's own leg (LocomotionRig::stance_reach), so loading response, mid-stance and pre-swing bend the knee
+// as the subject's did; both legs' limits bind in double support.
+inline constexpr std::size_t kStanceKnots = 16;
+inline constexpr float kStanceKneeDeg[kStanceKnots] = {-1.90f, 3.02f,  13.46f, 20.99f, 23.17f, 21.23f, 17.47f, 13.62f,
+                                                       10.55f, 7.93f, 5.56f,  4.30f,  4.68f,  8.95f,  18.22f, 34.69f};
+
 // Rig-constant data the locomotion system needs, derived once from the skeleton.
 struct LocomotionRig {
   std::vector<LimbChain> limbs;      // make_limbs order: left leg, right leg, left arm, right arm
@@ -158,9 +178,18 @@ struct LocomotionRig {
   glm::vec3 tip_rest[2];             // the toe tip's ground contact (l/r_forefoot_tip at the ball's height)
   float toe_limit = 0.6f;            // how far the midtarsal may dorsiflex to keep the toes down (rad)
   float leg_reach[2] = {0, 0};       // |hip-knee| + |knee-ankle|
-  // Hip -> ankle with the knee bent as at each swing knot (kSwingKneeDeg), humanoid axes: the swing's forward
+  // The rest pose's own joint angles in a gait lab's terms (radians, sagittal, left leg; flexion and dorsiflexion
+  // positive): thigh against the pelvis' vertical, shin against the thigh, shin's forward lean over the flat rest
+  // foot. A gait lab's zero is a standing body with vertical thigh and shin over a flat foot; a skeleton's rest
+  // pose need not be (Strata's default leans the straight leg 5 deg with the ankle behind the hip; ISO 200x's
+  // centres bend the knee 18 deg), so a local rotation of x reads as the lab's x + rest_*. The gait cycle's
+  // curves add these; the normative swing subtracts them before driving the rig.
+  float rest_hip_flexion = 0.0f, rest_knee_flexion = 0.0f, rest_ankle_dorsiflexion = 0.0f;
+  // Hip -> ankle with the knee bent as at each swing knot (kSwingKneeDeg less rest_knee_flexion), humanoid axes: the swing's forward
   // kinematics less the hip's rotation, which depends on the walker's pelvis tilt and is applied per frame.
   glm::vec3 swing_leg[2][kSwingKnots];
+  // Hip-ankle distance with the knee at each kStanceKneeDeg (never more than the leg reaches), humanoid units.
+  float stance_reach[2][kStanceKnots];
   float rig_height = 1.75f;          // stature of the rig (skull_tip, else top joint + 0.13 m)
   CardinalSpline wrist_path[2];      // closed loops in humanoid space: back, mid, front, mid
 };

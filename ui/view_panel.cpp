@@ -184,7 +184,7 @@ void gait_section(Crowd& scene, UiProbe* probe) {
   ImGui::SliderFloat("pelvis list", &g.pelvis_tilt, 0.0f, 0.2f, "%.3f rad");
   ImGui::SliderFloat("lateral sway", &g.lateral_sway, 0.0f, 0.06f, "%.3f m");
   ImGui::SliderFloat("anterior tilt", &g.pelvis_anterior_tilt, -0.2f, 0.3f, "%.3f rad");
-  ImGui::SliderFloat("knee drop", &g.nominal_drop, 0.0f, 0.06f, "%.3f m");
+  ImGui::SliderFloat("pelvis rise", &g.pelvis_rise_max, -0.03f, 0.03f, "%.3f m");
   ImGui::SliderFloat("footprint lead", &g.footprint_lead, 0.3f, 0.9f, "%.2f steps");
   ImGui::SliderFloat("heel off", &g.heel_off, 0.1f, 0.7f, "%.2f of stance");
   ImGui::SliderFloat("toe-off pitch", &g.toe_off_pitch, 0.0f, 1.3f, "%.2f rad");

@@ -171,11 +171,13 @@ TEST(DefaultSkeleton, HasThePapers25JointsInTopologicalOrder) {
   EXPECT_EQ(s.depth(s.find_joint("l_wrist")), 8);
 }
 
-TEST(DefaultSkeleton, CentresAreTheSymmetric200xDefaults) {
+// The ISO 200x knee centre sits 6.8 cm in front of the hip-ankle line (an 18 degree bend at rest); Strata's default
+// moves it onto that line so that its rest leg is straight as H-Anim's default pose asks. Everything else is 200x.
+TEST(DefaultSkeleton, CentresAreTheSymmetric200xDefaultsWithTheKneeOnTheStraightLeg) {
   const Skeleton s = load_default_humanoid().skeleton;
   const std::map<std::string, glm::vec3> expected = {
       {"HumanoidRoot", {0, 0.824f, 0.0277f}},   {"l_hip", {0.0961f, 0.9124f, -0.0001f}},
-      {"l_knee", {0.104f, 0.4867f, 0.0308f}},   {"l_ankle", {0.1101f, 0.0656f, -0.0736f}},
+      {"l_knee", {0.1031f, 0.4867f, -0.037f}},  {"l_ankle", {0.1101f, 0.0656f, -0.0736f}},
       {"vt1", {0.0065f, 1.4951f, -0.0387f}},    {"skullbase", {0.0044f, 1.6209f, 0.0236f}},
       {"l_elbow", {0.2014f, 1.1357f, -0.0682f}}, {"l_wrist", {0.1984f, 0.8663f, -0.0583f}},
   };
@@ -183,6 +185,13 @@ TEST(DefaultSkeleton, CentresAreTheSymmetric200xDefaults) {
     const std::int32_t j = s.find_joint(name);
     ASSERT_GE(j, 0) << name;
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(s.centers[j][a], c[a], 1e-6f) << name << " axis " << a;
+  }
+  for (const char* side : {"l_", "r_"}) {
+    const glm::vec3 hip = s.centers[s.find_joint(std::string(side) + "hip")];
+    const glm::vec3 knee = s.centers[s.find_joint(std::string(side) + "knee")];
+    const glm::vec3 ankle = s.centers[s.find_joint(std::string(side) + "ankle")];
+    const float bend = glm::degrees(std::acos(glm::dot(glm::normalize(knee - hip), glm::normalize(ankle - knee))));
+    EXPECT_LT(bend, 0.2f) << side << "leg: the rest leg is straight";
   }
   for (std::size_t j = 0; j < s.joint_count(); ++j) {
     const std::string& n = s.joint_names[j];
