@@ -61,11 +61,6 @@ struct GaitStyle {
   // The pelvis holds the stance knee at the subject's stance angles (kStanceKneeDeg, its loading response
   // included) through this fraction of the stance; later the heel rise keeps it there (heel_hold_from).
   float stance_knee_until = 0.75f;
-  // A little extra pelvis drop after each heel strike, over loading_window of a cycle: it deepens the loading
-  // response the stance angles give by ~3 deg (the subject's, 23 deg, was 20 with none). Before the stance
-  // angles held the knee, 0.03 over 0.35 of a cycle made that yield alone.
-  float loading_dip = 0.0075f;
-  float loading_window = 0.25f;
   // The pelvis height follows parabolas of this curvature (m/s^2) through the lowest heights the last and the
   // next heel strike allow, so the bob is smooth; hard reach limits alone gave ~1 cm/frame kinks.
   // 1.0 kept the pelvis ~4 cm low through mid-stance (knee 25-30 deg); 4-15 followed the legs' limits closer
