@@ -175,8 +175,8 @@ AnklePose rolled_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
   return {ball + q * ((rig.ankle_rest[leg] - rig.ball_rest[leg]) * scale), q};
 }
 
-// Where the stance leg's hip will be (world, at the pelvis' highest height) and how far from it the ankle may be
-// (world units): the heel rises no later than this distance needs.
+// Where the stance leg's hip is or will be (world) and how far from it the ankle may be (world units): the heel
+// rises no later than this distance needs.
 struct HipHold {
   glm::vec3 hip;
   float reach;
@@ -205,8 +205,8 @@ AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
   }
   float p = heel_rise_pitch(tau, style);
   AnklePose pose = rolled_pose(rig, leg, plant, h, p, scale);
-  if (hold && tau >= style.heel_hold_from && glm::dot(hold->hip - pose.position, h * glm::vec3(0.0f, 0.0f, 1.0f)) > 0.0f &&
-      glm::length(pose.position - hold->hip) > hold->reach) {
+  const bool hip_ahead = hold && glm::dot(hold->hip - pose.position, h * glm::vec3(0.0f, 0.0f, 1.0f)) > 0.0f;
+  if (hip_ahead && tau >= style.heel_hold_from && glm::length(pose.position - hold->hip) > hold->reach) {
     // Rolling lifts the ankle towards a hip ahead and above it; bisection on the pitch (the distance falls as
     // it grows over the range used). Up to 1.3 rad (74 deg): a foot that would need more is left there, and
     // the pelvis' own reach limit lowers it instead.
@@ -665,6 +665,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       const float tau = std::min(frac(phase - 0.5f * static_cast<float>(leg)) / sf, 1.0f);
       // The foot may pivot only while one point carries it: the heel before foot flat, the toe tip once the toes
       // bend no further. Flat, or rolling over the ball with the toes down, it holds (both ball and tip would move).
+      // The schedule's pitch is the least the heel has risen (the hold may have raised it sooner), so a foot read
+      // as on its tip is on it; one the hold already put there waits for the schedule, as every foot did before.
       const float roll = tau >= style.heel_off
                              ? heel_rise_pitch(tau, style)
                              : 0.0f;
@@ -1088,7 +1090,8 @@ bool StartWalkingJob::run() const {
       const Pose2 then = track.at(-since);
       const glm::vec3 hip = hip_position(rig, pelvis_motion(style, frac(g[kGaitPhase] - (psi - sf))), leg) +
                             glm::vec3(0.0f, style.heel_hold_height, 0.0f);
-      const HipHold hold{then.position + yaw(then.heading) * (hip * scale), stance_target_reach(rig, leg, 1.0f) * scale};
+      const HipHold hold{then.position + yaw(then.heading) * (hip * scale),
+                         stance_target_reach(rig, leg, 1.0f) * scale};
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, plant.position, plant.heading, 1.0f, scale, style, &p, 0.0f, &hold);
       const float strike_in = (1.0f - psi) * gp.cycle_time;

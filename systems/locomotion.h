@@ -180,8 +180,9 @@ struct LocomotionRig {
   // centres bend the knee 18 deg), so a local rotation of x reads as the lab's x + rest_*. The gait cycle's
   // curves add these; the normative swing subtracts them before driving the rig.
   float rest_hip_flexion = 0.0f, rest_knee_flexion = 0.0f, rest_ankle_dorsiflexion = 0.0f;
-  // Hip -> ankle with the knee bent as at each swing knot (kSwingKneeDeg less rest_knee_flexion), humanoid axes: the swing's forward
-  // kinematics less the hip's rotation, which depends on the walker's pelvis tilt and is applied per frame.
+  // Hip -> ankle with the knee bent as at each swing knot (kSwingKneeDeg less rest_knee_flexion), humanoid axes:
+  // the swing's forward kinematics less the hip's rotation, which depends on the walker's pelvis tilt and is
+  // applied per frame.
   glm::vec3 swing_leg[2][kSwingKnots];
   // Hip-ankle distance with the knee at each kStanceKneeDeg (never more than the leg reaches), humanoid units.
   float stance_reach[2][kStanceKnots];

@@ -187,6 +187,7 @@ void gait_section(Crowd& scene, UiProbe* probe) {
   ImGui::SliderFloat("pelvis rise", &g.pelvis_rise_max, -0.03f, 0.03f, "%.3f m");
   ImGui::SliderFloat("footprint lead", &g.footprint_lead, 0.3f, 0.9f, "%.2f steps");
   ImGui::SliderFloat("heel off", &g.heel_off, 0.1f, 0.7f, "%.2f of stance");
+  ImGui::SliderFloat("heel hold from", &g.heel_hold_from, 0.2f, 1.0f, "%.2f of stance");  // 1: the schedule alone
   ImGui::SliderFloat("toe-off pitch", &g.toe_off_pitch, 0.0f, 1.3f, "%.2f rad");
   ImGui::SliderFloat("swing clearance", &g.swing_clearance, 0.0f, 0.15f, "%.3f m");
   ImGui::SliderFloat("arm swing", &g.arm_swing, 0.0f, 0.4f, "%.3f m");
