@@ -207,21 +207,36 @@ AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
   AnklePose pose = rolled_pose(rig, leg, plant, h, p, scale);
   const bool hip_ahead = hold && glm::dot(hold->hip - pose.position, h * glm::vec3(0.0f, 0.0f, 1.0f)) > 0.0f;
   if (hip_ahead && tau >= style.heel_hold_from && glm::length(pose.position - hold->hip) > hold->reach) {
-    // Rolling lifts the ankle towards a hip ahead and above it; bisection on the pitch (the distance falls as
-    // it grows over the range used). Up to 1.3 rad (74 deg): a foot that would need more is left there, and
-    // the pelvis' own reach limit lowers it instead.
-    float lo = p, hi = 1.3f;
-    if (glm::length(rolled_pose(rig, leg, plant, h, hi, scale).position - hold->hip) > hold->reach) {
-      lo = hi;
-    } else {
-      for (int it = 0; it < 14; ++it) {
-        const float mid = 0.5f * (lo + hi);
-        if (glm::length(rolled_pose(rig, leg, plant, h, mid, scale).position - hold->hip) > hold->reach) lo = mid;
-        else hi = mid;
-      }
-      lo = hi;
+    // Rolling lifts the ankle on a circle about the pivot (the ball, then, past the toes' limit, the toe tip:
+    // the ball then turns about the tip with the foot, so the ankle does too): the least pitch that brings it
+    // within reach is where that circle enters the sphere about the hip, in closed form. Up to 1.3 rad
+    // (74 deg): a foot that would need more is left there, and the pelvis' own reach limit lowers it instead.
+    // Rejected: bisection on the pitch (3.5x the system's time at 14 steps).
+    const glm::quat to_foot = glm::conjugate(h);
+    auto first_within = [&](const glm::vec3& pivot, const glm::vec3& v, float lo) {
+      // |R_x(q) v - H|^2 <= D^2  <=>  B cos q + C sin q >= E, with H the hip about the pivot in the foot's axes.
+      const glm::vec3 hip = to_foot * (hold->hip - pivot);
+      const float b = hip.y * v.y + hip.z * v.z, c = hip.z * v.y - hip.y * v.z;
+      const float e = 0.5f * (glm::dot(v, v) + glm::dot(hip, hip) - hold->reach * hold->reach) - hip.x * v.x;
+      if (b * std::cos(lo) + c * std::sin(lo) >= e) return lo;
+      const float r = std::hypot(b, c);
+      if (e > r) return 1e9f;
+      const float start = std::atan2(c, b) - std::acos(std::clamp(e / r, -1.0f, 1.0f));
+      return start + kTwoPi * std::ceil((lo - start) / kTwoPi);
+    };
+    const glm::vec3 ankle_from_ball = (rig.ankle_rest[leg] - rig.ball_rest[leg]) * scale;
+    float q = 1e9f;
+    if (p < rig.toe_limit) {
+      q = first_within(plant + h * ((rig.ball_rest[leg] - rig.ankle_rest[leg]) * scale), ankle_from_ball, p);
+      if (q > rig.toe_limit) q = 1e9f;
     }
-    p = lo;
+    if (q > 1e8f) {
+      const glm::vec3 ankle_from_tip =
+          pitch(-rig.toe_limit) * ((rig.ball_rest[leg] - rig.tip_rest[leg]) * scale) + ankle_from_ball;
+      q = first_within(plant + h * ((rig.tip_rest[leg] - rig.ankle_rest[leg]) * scale), ankle_from_tip,
+                       std::max(p, rig.toe_limit));
+    }
+    p = std::min(q, 1.3f);
     pose = rolled_pose(rig, leg, plant, h, p, scale);
   }
   if (foot_pitch) *foot_pitch = p;
@@ -729,6 +744,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // Through loading response and mid-stance the pelvis holds the stance knee at the subject's angle; later
       // the heel rise does (stance_pose), and the pelvis is held only by the straight leg.
       if (reach && tau < style.stance_knee_until) *reach = std::min(*reach, stance_target_reach(rig, leg, tau));
+      if (tau < style.heel_hold_from)  // the hold starts later: spare the hip's pose
+        return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch, strike_pitch);
       const HipHold hold = hip_hold(leg, ahead, tau);
       return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch, strike_pitch, &hold);
     }
@@ -821,8 +838,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     // (issue 21). The foot only rolls further about its own contacts, so it neither slides nor moves away
     // from the hip: the reach the pelvis was placed for still holds.
     for (int leg = 0; leg < 2; ++leg) {
-      if (legs[leg].swinging) continue;
       const float tau = std::min(legs[leg].psi / sf, 1.0f);
+      if (legs[leg].swinging || tau < style.heel_hold_from) continue;
       const HipHold hold = hip_hold_now(leg, root_translation, motion, tau);
       ankle[leg] = stance_pose(rig, leg, legs[leg].plant, legs[leg].plant_heading, tau, scale, style, &toe_pitch[leg],
                                strike_pitch, &hold);
