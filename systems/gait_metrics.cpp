@@ -37,6 +37,17 @@ double distance_mm(const glm::vec3& a, const float ref[3]) {
 
 }  // namespace
 
+double GaitMetrics::LegTrack::Contact::update(bool down, const glm::vec3& p) {
+  if (!done && !tracking && down) {
+    for (int k = 0; k < 3; ++k) ref[k] = p[k];
+    tracking = true;
+  } else if (tracking && !down) {
+    tracking = false;
+    done = true;
+  }
+  return tracking ? distance_mm(p, ref) : -1.0;
+}
+
 GaitMetrics::GaitMetrics(const Skeleton& skeleton, const LocomotionRig& rig, const GaitStyle& style)
     : skeleton_(skeleton), rig_(rig), style_(style) {
   report_.cadence_min = 1e9;
@@ -133,7 +144,6 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
         t.cadence_samples = 0;
         for (int k = 0; k < 3; ++k) t.heel_ref[k] = heel[k];
         t.flat = false;
-        t.ankle_tracking = false;
       }
       if (swinging) {
         // Ground clearance through the middle of the swing (20-80 %; it starts and ends on the ground): the lowest
@@ -165,30 +175,13 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
           if (!t.flat) {
             for (int k = 0; k < 3; ++k) t.tip_ref[k] = tip[k];
             t.flat = true;
-            t.ankle_tracking = t.ball_tracking = false;
-            t.ankle_done = !heel_down;  // a stance first seen with the heel up (a walker starting mid-roll)
-            t.ball_done = !ball_down;
+            t.ankle.start(heel_down);
+            t.ball.start(ball_down);
           }
-          if (!t.ankle_done && !t.ankle_tracking && heel_down) {
-            for (int k = 0; k < 3; ++k) t.ankle_ref[k] = ankle[k];
-            t.ankle_tracking = true;
-          } else if (t.ankle_tracking && !heel_down) {
-            t.ankle_tracking = false;
-            t.ankle_done = true;
-          }
-          if (!t.ball_done && !t.ball_tracking && ball_down) {
-            for (int k = 0; k < 3; ++k) t.ball_ref[k] = ball[k];
-            t.ball_tracking = true;
-          } else if (t.ball_tracking && !ball_down) {
-            t.ball_tracking = false;
-            t.ball_done = true;
-          }
-          if (t.ball_tracking)
-            report_.foot_slide_ball_mm_max = std::max(report_.foot_slide_ball_mm_max, distance_mm(ball, t.ball_ref));
+          report_.foot_slide_ball_mm_max = std::max(report_.foot_slide_ball_mm_max, t.ball.update(ball_down, ball));
           report_.foot_slide_tip_mm_max = std::max(report_.foot_slide_tip_mm_max, distance_mm(tip, t.tip_ref));
-          if (t.ankle_tracking)
-            report_.foot_slide_ankle_mm_max =
-                std::max(report_.foot_slide_ankle_mm_max, distance_mm(ankle, t.ankle_ref));
+          report_.foot_slide_ankle_mm_max =
+              std::max(report_.foot_slide_ankle_mm_max, t.ankle.update(heel_down, ankle));
         }
       }
       t.swinging = swinging;

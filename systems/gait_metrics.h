@@ -50,14 +50,19 @@ class GaitMetrics {
     float plant_distance = 0;
     double cadence_sum = 0;
     std::uint32_t cadence_samples = 0;
-    float ball_ref[3] = {0, 0, 0};
-    float ankle_ref[3] = {0, 0, 0};
+    // A point that must stay put while its contact is on the ground: referenced the first frame it is down in a
+    // stance, tracked until it lifts, not again until the next stance.
+    struct Contact {
+      float ref[3] = {0, 0, 0};
+      bool tracking = false, done = false;
+      void start(bool down) { tracking = false, done = !down; }  // a stance first seen lifted (starting mid-roll)
+      // The distance (mm) from the reference while tracked, else a negative value.
+      double update(bool down, const glm::vec3& p);
+    };
+    Contact ball, ankle;  // the ball while it is down; the ankle while the heel is down (the foot flat)
     float heel_ref[3] = {0, 0, 0};
     float tip_ref[3] = {0, 0, 0};
-    bool flat = false;  // foot flat reached this stance (the references of ball, ankle and tip taken)
-    bool ankle_tracking = false;  // the heel still down: the flat foot's ankle must not move
-    bool ball_tracking = false;   // the ball still down: it carries the foot until the toe tip does
-    bool ankle_done = false, ball_done = false;  // lifted in this stance
+    bool flat = false;  // foot flat reached this stance (the toe tip's reference taken)
   };
   struct WalkerTrack {
     LegTrack legs[2];
