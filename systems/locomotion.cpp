@@ -341,6 +341,18 @@ glm::vec3 hip_position(const LocomotionRig& rig, const PelvisMotion& motion, int
   return glm::vec3(motion.sway, 0.0f, 0.0f) + rig.sacro_center + motion.sacro * (rig.hip_rest[leg] - rig.sacro_center);
 }
 
+// The same hip with the pelvis at root translation `root` (whose x is the sway).
+glm::vec3 hip_at_root(const LocomotionRig& rig, const PelvisMotion& motion, const glm::vec3& root, int leg) {
+  return root + (hip_position(rig, motion, leg) - glm::vec3(motion.sway, 0.0f, 0.0f));
+}
+
+// A stance heel's hold (stance_pose) for the hip at `hip` (humanoid units) of a walker placed at `placement`:
+// the hip in world units and the hip-ankle distance the normative stance knee gives at tau.
+HipHold hip_hold_at(const LocomotionRig& rig, const Pose2& placement, const glm::vec3& hip, int leg, float tau,
+                    float scale) {
+  return {placement.position + yaw(placement.heading) * (hip * scale), stance_target_reach(rig, leg, tau) * scale};
+}
+
 // The highest root translation y (humanoid units) at which both hips still reach their ankles (world positions),
 // for a pelvis placed by `frame` and moving as `motion`. smooth > 0 blends the two legs' limits (continuous
 // output for the per-frame value); 0 takes the plain minimum.
@@ -594,15 +606,9 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   // A stance leg's hip `ahead` seconds from now at the pelvis' highest height, and the hip-ankle distance its
   // knee angle at tau gives (stance_pose's heel rise keeps to it).
   auto hip_hold = [&](int leg, float ahead, float tau) -> HipHold {
-    const Pose2 p = pelvis_ahead(ahead);
     const glm::vec3 hip = hip_position(rig, pelvis_motion(style, frac(phase + ahead / gp.cycle_time)), leg) +
                           glm::vec3(0.0f, style.heel_hold_height, 0.0f);
-    return {p.position + yaw(p.heading) * (hip * scale), stance_target_reach(rig, leg, tau) * scale};
-  };
-  // The same for the pelvis as placed now (root translation `root`, moving as `m`).
-  auto hip_hold_now = [&](int leg, const glm::vec3& root, const PelvisMotion& m, float tau) -> HipHold {
-    const glm::vec3 hip = root + (hip_position(rig, m, leg) - glm::vec3(m.sway, 0.0f, 0.0f));
-    return {pelvis.position + yaw(pelvis.heading) * (hip * scale), stance_target_reach(rig, leg, tau) * scale};
+    return hip_hold_at(rig, pelvis_ahead(ahead), hip, leg, tau, scale);
   };
 
   // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
@@ -623,7 +629,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // function), so the swing starts where the foot is.
       const glm::vec3 last_root{lanes.root_translation.at(0, i), lanes.root_translation.at(1, i),
                                 lanes.root_translation.at(2, i)};
-      const HipHold hold = hip_hold_now(leg, last_root, pelvis_motion(style, phase), 1.0f);
+      const HipHold hold =
+          hip_hold_at(rig, pelvis, hip_at_root(rig, pelvis_motion(style, phase), last_root, leg), leg, 1.0f, scale);
       const AnklePose from =
           stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), 1.0f, scale, style, &p, 0.0f, &hold);
       const float strike_in = (1.0f - psi) * gp.cycle_time;
@@ -815,8 +822,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   }
   const float past = g[kGaitDipHeight] + curvature * g[kGaitDipAge] * g[kGaitDipAge];
   // Blended, not a plain min: where the rising parabola of the last dip meets the falling one of the next, a
-  // plain min leaves a corner (an 8 mm/frame change of vertical speed at 60 fps).
-  // The corner where the rising parabola of the last dip meets the falling one of the next is rounded in
+  // plain min leaves a corner (an 8 mm/frame change of vertical speed at 60 fps). The corner is rounded in
   // proportion to it: their slopes differ by 2 c (age + ahead), and a blend of width c (age + ahead)^2 turns it
   // at the same curvature. A fixed 2.5 cm blend also lowered the pelvis 6 mm wherever the two coincide (the
   // binding limit now and just ahead, at every mid-stance), which bent the stance knee 10 deg.
@@ -840,7 +846,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     for (int leg = 0; leg < 2; ++leg) {
       const float tau = std::min(legs[leg].psi / sf, 1.0f);
       if (legs[leg].swinging || tau < style.heel_hold_from) continue;
-      const HipHold hold = hip_hold_now(leg, root_translation, motion, tau);
+      const HipHold hold = hip_hold_at(rig, pelvis, hip_at_root(rig, motion, root_translation, leg), leg, tau, scale);
       ankle[leg] = stance_pose(rig, leg, legs[leg].plant, legs[leg].plant_heading, tau, scale, style, &toe_pitch[leg],
                                strike_pitch, &hold);
     }
@@ -859,7 +865,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // A swing foot the pelvis did not wait for is drawn in to the leg's reach (at a fast walk the normative
       // swing's nearly straight knee in late swing put it a few centimetres beyond): the foot trails a little
       // rather than the pelvis dropping for it (which made 1 cm/frame^2 jolts when the cadence changed).
-      const glm::vec3 hip = root_translation + (hip_position(rig, motion, leg) - glm::vec3(motion.sway, 0.0f, 0.0f));
+      const glm::vec3 hip = hip_at_root(rig, motion, root_translation, leg);
       const glm::vec3 reach = goal - hip;
       const float most = kReachUsed * rig.leg_reach[leg], length = glm::length(reach);
       if (length > most) goal = hip + reach * (most / length);
@@ -1107,8 +1113,7 @@ bool StartWalkingJob::run() const {
       const Pose2 then = track.at(-since);
       const glm::vec3 hip = hip_position(rig, pelvis_motion(style, frac(g[kGaitPhase] - (psi - sf))), leg) +
                             glm::vec3(0.0f, style.heel_hold_height, 0.0f);
-      const HipHold hold{then.position + yaw(then.heading) * (hip * scale),
-                         stance_target_reach(rig, leg, 1.0f) * scale};
+      const HipHold hold = hip_hold_at(rig, then, hip, leg, 1.0f, scale);
       float p = 0.0f;
       const AnklePose from = stance_pose(rig, leg, plant.position, plant.heading, 1.0f, scale, style, &p, 0.0f, &hold);
       const float strike_in = (1.0f - psi) * gp.cycle_time;
