@@ -170,7 +170,7 @@ void add_crowd_report(CLI::App& report, int& exit_code) {
   cmd->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(positive_up_to(1000));
   cmd->add_option("--json", o->json, "Write the report here");
   cmd->add_flag("--whole-duration", o->keep_going, "Run the whole duration even when every agent has arrived");
-  cmd->add_flag("--body", o->body, "Skin the bodies too (at --level, auto meaning 0); by default walkers have no body");
+  cmd->add_flag("--skinned", o->body, "Skin the bodies too (at --level, auto meaning 0; --body picks which); by default walkers have no body");
   cmd->callback([o, &exit_code] { exit_code = run_crowd_report(*o); });
 }
 

@@ -50,6 +50,7 @@ struct SkinReportOptions {
   float seconds = 2.5f;  // of walking: two gait cycles at the default cadence
   float fps = 60.0f;
   bool automatic = true;
+  ShippedBody body = kDefaultShippedBody;
 };
 
 struct Quality {
@@ -110,10 +111,10 @@ struct ModeQuality {
 // Level 0 skinned by the kernel on one core, one walker in a walking pose, without muscles: seconds per call,
 // the best of several interleaved rounds per mode (interleaving spreads a shared machine's noise over every
 // mode alike; the best round is the one least disturbed).
-std::array<double, 3> kernel_seconds(const Rig& base) {
+std::array<double, 3> kernel_seconds(const Rig& base, ShippedBody body) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   Rig rig = base;
-  rig.body = default_bound_body();
+  rig.body = default_bound_body(body);
   rig.muscles = nullptr;
   std::array<std::unique_ptr<Crowd>, 3> scenes;
   std::array<std::vector<float>, 3> outs;
@@ -182,7 +183,7 @@ ModeQuality measure_mode(const Rig& rig, const BodyLevel& level, SkinningMode mo
 nlohmann::json modes_report(const Rig& rig, const BodyLevel& level, const SkinReportOptions& o) {
   bool targets = true;
   const CorCentres cor = compute_cor_centres(level.mesh, level.binding);  // uncached: its time is reported
-  const std::array<double, 3> seconds = kernel_seconds(rig);
+  const std::array<double, 3> seconds = kernel_seconds(rig, o.body);
   nlohmann::json modes;
   std::printf("\n%-5s %10s %9s %9s %9s %10s %9s %13s %9s\n", "mode", "elbow vol%", "knee vol%", "twist 90",
               "twist 180", "bulge mm", "inverted", "M vertices/s", "cost/lbs");
@@ -348,7 +349,7 @@ int run_skin_report(const SkinReportOptions& o) {
   if (!check_outputs("report skin", {{"--json", o.json}, {"--images", o.images, true}})) return kExitFailure;
   try {
     const Rig rig = to_rig(load_default_humanoid());
-    const BodyLevels& levels = default_body();
+    const BodyLevels& levels = shipped_body_levels(o.body);
     const int paper_vertices[3] = {17953, 8923, 5133};
     nlohmann::json out;
     nlohmann::json level_reports = nlohmann::json::array();
@@ -357,7 +358,7 @@ int run_skin_report(const SkinReportOptions& o) {
                 "bound 1", "bound 2", "inverted", "seam gap", "elbow vol%", "knee vol%", "NaN");
     for (int l = 0; l < 3; ++l) {
       const Mesh& mesh = levels.levels[static_cast<std::size_t>(l)];
-      BodyLevel level{mesh, bind_three_step(mesh, rig.skeleton, default_binding_tables())};
+      BodyLevel level{mesh, bind_three_step(mesh, rig.skeleton, shipped_binding_tables(o.body))};
       const BindingStats stats = binding_stats(level.binding);
       std::set<std::uint16_t> parts(mesh.part.begin(), mesh.part.end());
       const Quality q = measure(rig, level, o);
@@ -398,13 +399,11 @@ int run_skin_report(const SkinReportOptions& o) {
     out["levels"] = level_reports;
     {
       const Mesh& mesh0 = levels.levels[0];
-      const BodyLevel level0{mesh0, bind_three_step(mesh0, rig.skeleton, default_binding_tables())};
+      const BodyLevel level0{mesh0, bind_three_step(mesh0, rig.skeleton, shipped_binding_tables(o.body))};
       out["modes"] = modes_report(rig, level0, o);
     }
     out["cage"] = {{"vertices", levels.cage.vertex_count()}, {"triangles", levels.cage.triangle_count()}};
-    // The shipped body is the procedural one (rig/body_generator.h); a body derived from the MakeHuman mesh is
-    // issue 20's next step.
-    out["body_source"] = "procedural";
+    out["body_source"] = shipped_body_name(o.body);
     out["anthropometry"] = anthropometry_json(levels.levels[0], rig.skeleton);
     std::printf("anthropometry (level 0 against the notes' references):");
     for (const auto& [key, row] : out["anthropometry"].items())
@@ -434,6 +433,14 @@ void add_skin_report(CLI::App& report, int& exit_code) {
                    "Write skin_modes.png here: the elbow at 120 deg and the forearm twisted 180 deg per skinning mode");
   skin->add_option("--seconds", o->seconds, "Seconds of walking measured")->capture_default_str()->check(positive_up_to(3600));
   skin->add_flag("!--no-automatic", o->automatic, "Skip the automatic (bone heat) binding comparison");
+  skin->add_option_function<std::string>(
+          "--body",
+          [o](const std::string& value) {
+            if (const auto body = parse_shipped_body(value)) o->body = *body;
+            else throw CLI::ValidationError("--body", "must be makehuman or procedural, got '" + value + "'");
+          },
+          "Which shipped body to measure: makehuman or procedural")
+      ->default_str(shipped_body_name(o->body));
   skin->callback([o, &exit_code] { exit_code = run_skin_report(*o); });
 }
 

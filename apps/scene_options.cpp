@@ -80,7 +80,8 @@ nlohmann::json scene_inputs_json(const SceneOptions& o) {
           {"muscles", o.muscles},
           {"skinning", skinning_mode_name(o.skinning)},
           {"muscle_overrides", file(o.muscle_overrides)},
-          {"binding_overrides", file(o.binding_overrides)}};
+          {"binding_overrides", file(o.binding_overrides)},
+          {"body", shipped_body_name(o.body)}};
 }
 
 void add_scene_options(CLI::App& cmd, SceneOptions& o) {
@@ -157,6 +158,17 @@ void add_scene_options(CLI::App& cmd, SceneOptions& o) {
       ->capture_default_str()->check(finite_in(0, 100));
   cmd.add_option("--muscle-overrides", o.muscle_overrides,
                  "JSON file of per-muscle gains, e.g. {\"gain\": 1, \"muscles\": {\"l_biceps\": 2}}");
+  const CLI::Validator body_name(
+      [](std::string& value) -> std::string {
+        if (parse_shipped_body(value)) return {};
+        return "must be makehuman or procedural, got '" + value + "'";
+      },
+      "makehuman|procedural");
+  cmd.add_option_function<std::string>(
+         "--body", [&o](const std::string& value) { o.body = *parse_shipped_body(value); },
+         "Which shipped body the default skeleton wears: makehuman (derived from the MakeHuman hm08 base mesh, "
+         "CC0) or procedural (grown from the skeleton); ignored with --mesh or an --skeleton that brings its skin")
+      ->check(body_name)->default_str(shipped_body_name(o.body));
   cmd.add_option("--binding-overrides", o.binding_overrides,
                  "Skin binding overrides file (format: data/binding_overrides.json; e.g. saved by the binding "
                  "editor) used instead of the shipped one to bind the shipped body's levels and cage");

@@ -8,12 +8,13 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OUT="$1"
 SHARED="${STRATA_SHARED_DATA:-$ROOT/../shared/data}"
 mkdir -p "$OUT"
-for t in hanim obj bvh gltf makehuman binding muscle scenario; do mkdir -p "$OUT/$t"; cp "$ROOT"/fuzz/seeds/$t/* "$OUT/$t/"; done
+for t in hanim obj bvh gltf makehuman makehuman_pack binding muscle scenario; do mkdir -p "$OUT/$t"; cp "$ROOT"/fuzz/seeds/$t/* "$OUT/$t/"; done
 
 cp "$ROOT"/data/default_skeleton.x3d "$ROOT"/tests/data/*.xml "$OUT/hanim/"
 # Multi-file targets read their files joined by NUL bytes (fuzz/fuzz_common.h).
 { cat "$ROOT/data/part_joints.json"; printf '\0'; cat "$ROOT/data/binding_overrides.json"; } > "$OUT/binding/shipped.bin"
 cp "$ROOT"/data/scenarios/*.json "$OUT/scenario/"
+cp "$ROOT"/data/makehuman_body.bin "$OUT/makehuman_pack/shipped.bin"
 { cat "$ROOT/data/muscles.json"; printf '\0'; printf '{"gain": 1.5, "muscles": {"l_biceps": 2}}'; } > "$OUT/muscle/shipped.bin"
 
 if [ -d "$SHARED" ]; then

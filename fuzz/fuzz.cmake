@@ -22,6 +22,7 @@ add_library(strata_fuzz_loaders STATIC
   io/obj.cpp
   io/mesh_check.cpp
   io/makehuman.cpp
+  io/makehuman_pack.cpp
   io/gltf.cpp
   rig/binding.cpp
   rig/harmonic_weights.cpp
@@ -36,10 +37,10 @@ target_compile_options(strata_fuzz_loaders PUBLIC ${STRATA_FUZZ_FLAGS} PRIVATE -
 target_link_options(strata_fuzz_loaders PUBLIC -fsanitize=address,undefined)
 target_link_libraries(strata_fuzz_loaders
   PUBLIC glm::glm
-  PRIVATE pugixml::pugixml nlohmann_json::nlohmann_json TinyGLTF::TinyGLTF TBB::tbb)
+  PRIVATE pugixml::pugixml nlohmann_json::nlohmann_json TinyGLTF::TinyGLTF TBB::tbb ZLIB::ZLIB)
 
 # One target per loader.
-set(STRATA_FUZZ_TARGETS hanim obj bvh gltf makehuman binding muscle scenario)
+set(STRATA_FUZZ_TARGETS hanim obj bvh gltf makehuman makehuman_pack binding muscle scenario)
 add_custom_target(strata_fuzz_all)
 foreach(target ${STRATA_FUZZ_TARGETS})
   add_executable(fuzz_${target} fuzz/fuzz_${target}.cpp)

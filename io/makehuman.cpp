@@ -324,6 +324,10 @@ ImportedBody load_makehuman_text(std::string_view base_obj, std::string_view mhs
     const auto strongest = std::max_element(inf.begin(), inf.end(),
                                             [](const auto& a, const auto& b) { return a.second < b.second; });
     obj.part[v] = bone_part[strongest->first];
+    // The eye bones weigh the lids ~5 %, never most, so by the strongest bone no vertex would be an eye's; every
+    // vertex they touch is taken as that eye's part (141 a side), so the body has all 53 of the paper's parts.
+    for (const auto& [b, w] : inf)
+      if (const std::string& part = parts[bone_part[b]]; part == "lEye" || part == "rEye") obj.part[v] = bone_part[b];
     std::fill(folded.begin(), folded.end(), 0.0f);
     for (const auto& [b, w] : inf) folded[bone_joint[b]] += w / sum;
     for (std::size_t j = 0; j < order.size(); ++j) order[j] = static_cast<std::int16_t>(j);

@@ -434,6 +434,18 @@ const BindingTables& default_binding_tables() {
   return tables;
 }
 
+const BindingTables& makehuman_binding_tables() {
+  static const BindingTables tables = [] {
+    const auto extra = embedded::find("data/makehuman_binding_overrides.json");
+    if (!extra) throw LoadError("<embedded>: data/makehuman_binding_overrides.json missing from the build");
+    BindingTables t = default_binding_tables();
+    BindingTables more = load_binding_tables("", *extra, "", "<embedded>/data/makehuman_binding_overrides.json");
+    t.overrides.insert(t.overrides.end(), more.overrides.begin(), more.overrides.end());
+    return t;
+  }();
+  return tables;
+}
+
 namespace {
 
 using OrderedJson = nlohmann::ordered_json;  // keys in the order a reader expects (name first), not sorted

@@ -75,6 +75,9 @@ BindingTables load_binding_overrides_file(const std::filesystem::path& path, con
 // The shipped tables (data/part_joints.json, data/binding_overrides.json, embedded), parsed once. Throws LoadError
 // when the build did not embed them (STRATA_EMBEDDED_FILES).
 const BindingTables& default_binding_tables();
+// The MakeHuman-derived body's tables (rig/makehuman_body.h): the shipped ones with the selections of
+// data/makehuman_binding_overrides.json applied after theirs.
+const BindingTables& makehuman_binding_tables();
 
 // Step-2 threshold of one joint: vertices closer than radius_m to its centre blend it with the adjacent joint.
 struct BlendJoint {

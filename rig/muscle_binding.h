@@ -20,6 +20,7 @@
 
 #include "components/mesh.h"
 #include "components/muscle.h"
+#include "rig/body_rig.h"
 
 namespace strata {
 
@@ -38,6 +39,7 @@ std::shared_ptr<const MuscleRig> bind_muscle_rig(MuscleSet set, const Body& body
 
 // The shipped muscles (data/muscles.json) on the shipped body and skeleton (rig/body_rig.h default_bound_body),
 // bound once per process.
-std::shared_ptr<const MuscleRig> default_muscle_rig();
+// Defined in rig/body_rig.cpp, beside the bodies.
+std::shared_ptr<const MuscleRig> default_muscle_rig(ShippedBody body = kDefaultShippedBody);
 
 }  // namespace strata

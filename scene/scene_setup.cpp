@@ -39,7 +39,7 @@ namespace {
 void attach_muscles(Rig& rig, const SceneOptions& o, bool default_rig) {
   if (o.muscles == "none" || !rig.body) return;
   if (o.muscles == "default" && default_rig) {
-    rig.muscles = default_muscle_rig();
+    rig.muscles = default_muscle_rig(o.body);
     return;
   }
   try {
@@ -107,13 +107,13 @@ std::unique_ptr<Crowd> build_scene(const SceneOptions& o) {
     const std::optional<BindingTables> tables =
         o.binding_overrides.empty()
             ? std::nullopt
-            : std::optional(load_binding_overrides_file(o.binding_overrides, default_binding_tables()));
+            : std::optional(load_binding_overrides_file(o.binding_overrides, shipped_binding_tables(o.body)));
     if (!o.level.is_none()) {
       if (tables) {
-        rig.body = bind_body(default_body().levels, rig.skeleton, BindingMethod::ThreeStep, &default_body().cage,
-                             &*tables);
+        const BodyLevels& levels = shipped_body_levels(o.body);
+        rig.body = bind_body(levels.levels, rig.skeleton, BindingMethod::ThreeStep, &levels.cage, &*tables);
       } else if (o.skeleton.empty()) {
-        rig.body = default_bound_body();
+        rig.body = default_bound_body(o.body);
       } else if (std::optional<BodyLevel> skin = skin_from_skeleton(rig.skeleton)) {
         rig.body = std::make_shared<const Body>(Body{{std::move(*skin)}});
       }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "components/detail_level.h"
+#include "rig/body_rig.h"
 #include "scene/crowd.h"
 
 namespace strata {
@@ -30,6 +31,7 @@ struct SceneOptions {
   float muscle_gain = 1.0f;         // scales every muscle's forces
   std::string muscle_overrides;     // per-muscle gains file (io/muscle_file.h)
   std::string binding_overrides;    // step-3 overrides file replacing the shipped ones (shipped body only)
+  ShippedBody body = kDefaultShippedBody;  // which shipped body the default skeleton wears (rig/body_rig.h)
   std::uint32_t mesh_budget = LodPolicy{}.mesh_budget;  // most walkers drawn as meshes under auto (0 = no cap)
   float impostor_px = LodPolicy{}.impostor_px;          // walkers shorter on screen are impostors under auto
   std::string scenario;  // a shipped scenario's name or a scenario file (components/scenario.h); empty = none

@@ -103,7 +103,7 @@ sanitize() {
   env -u DISPLAY ctest --output-on-failure -j "$JOBS" -E '^install_consumer$' -LE soak "$@"
 }
 
-FUZZ_TARGETS=(hanim obj bvh gltf makehuman binding muscle scenario)
+FUZZ_TARGETS=(hanim obj bvh gltf makehuman makehuman_pack binding muscle scenario)
 fuzz() {
   local seconds="${1:-20}"
   [ $# -gt 0 ] && shift
@@ -118,8 +118,8 @@ fuzz() {
   cmake --build "$dir" -j "$JOBS" --target strata_fuzz_all
   bash "$ROOT/fuzz/build_corpus.sh" "$dir/corpus" >/dev/null
   mkdir -p "$dir/artifacts"
-  # One libFuzzer process per target, JOBS at a time: each is single-threaded, so the 8 targets take 4 rounds of
-  # SECONDS on 2 cores instead of 8.
+  # One libFuzzer process per target, JOBS at a time: each is single-threaded, so the 9 targets take 5 rounds of
+  # SECONDS on 2 cores instead of 9.
   for t in "${targets[@]}"; do
     while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do wait -n || true; done
     echo "strata.sh fuzz: $t for $seconds s" >&2

@@ -7,6 +7,7 @@
 #include "components/body.h"
 #include "profiling/profiler.h"
 #include "rig/binding_editor.h"
+#include "rig/body_rig.h"
 #include "scene/body_settings.h"
 #include "scene/step.h"
 
@@ -112,7 +113,7 @@ bool is_mesh_level(const Crowd& scene, DetailLevel level) {
 
 const BindingTables& ViewSession::binding_tables() const {
   if (editor_) return editor_->tables();
-  return have_tables_ ? tables_ : default_binding_tables();
+  return have_tables_ ? tables_ : shipped_binding_tables(options_.body);
 }
 
 void ViewSession::start_editing() {
@@ -131,8 +132,8 @@ void ViewSession::start_editing() {
     // The tables the scene's body was bound with: the shipped ones, or --binding-overrides's file, which is then
     // also where Save writes unless the user names another.
     tables_ = options_.binding_overrides.empty()
-                  ? default_binding_tables()
-                  : load_binding_overrides_file(options_.binding_overrides, default_binding_tables());
+                  ? shipped_binding_tables(options_.body)
+                  : load_binding_overrides_file(options_.binding_overrides, shipped_binding_tables(options_.body));
     have_tables_ = true;
   }
   const int level = scene.skin.level.index();

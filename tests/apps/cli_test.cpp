@@ -212,7 +212,7 @@ TEST(StrataReport, SkinWritesLevelsBindingAndQuality) {
   }
   // Where the body comes from, and its proportions against the anthropometry references: every measure present,
   // the stature the notes' 1.75 m, every ratio within a quarter of its reference.
-  EXPECT_EQ(j.at("body_source"), "procedural");
+  EXPECT_EQ(j.at("body_source"), "makehuman");
   const auto& body = j.at("anthropometry");
   for (const char* key : {"stature_m", "shoulder_width_m", "hip_width_m", "upper_arm_m", "forearm_m", "thigh_m", "shank_m"}) {
     ASSERT_TRUE(body.contains(key)) << key;
@@ -229,8 +229,13 @@ TEST(StrataReport, SkinWritesLevelsBindingAndQuality) {
   EXPECT_LT(modes.at("lbs").at("twist180_area_ratio").get<double>(), 0.5) << "the candy wrapper";
   for (const char* mode : {"dqs", "cor"}) {
     EXPECT_GT(modes.at(mode).at("twist180_area_ratio").get<double>(), 0.9) << mode;
+    // The knee by a wide margin; the elbow less so on the MakeHuman body, whose forearm and biceps are full
+    // (dqs -34 %, cor -26 % against linear blending's -37 %).
+    EXPECT_GT(modes.at(mode).at("knee_volume_change_pct").get<double>(),
+              modes.at("lbs").at("knee_volume_change_pct").get<double>() + 10.0)
+        << mode << " keeps more of the knee's volume than linear blending";
     EXPECT_GT(modes.at(mode).at("elbow_volume_change_pct").get<double>(),
-              modes.at("lbs").at("elbow_volume_change_pct").get<double>() + 10.0)
+              modes.at("lbs").at("elbow_volume_change_pct").get<double>())
         << mode << " keeps more of the elbow's volume than linear blending";
     EXPECT_GT(modes.at(mode).at("vertices_per_second").get<double>(), 0.0);
   }

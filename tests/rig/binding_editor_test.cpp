@@ -366,7 +366,7 @@ struct HipEdit {
 HipEdit edit_around_left_hip(std::size_t level) {
   const Skeleton sk = load_default_humanoid().skeleton;
   const BodyLevel& l = default_bound_body()->levels[level];
-  HipEdit e{BindingEditor(l.mesh, sk, l.binding, default_binding_tables()), sk.find_joint("l_hip"), {}};
+  HipEdit e{BindingEditor(l.mesh, sk, l.binding, shipped_binding_tables()), sk.find_joint("l_hip"), {}};
   const glm::mat4 camera = body_camera({0.0f, 0.9f, 3.0f});
   const std::vector<std::uint8_t> seen = visible_vertices(edit_mesh(l.mesh), camera, kView);
   select_brush(edit_mesh(l.mesh), camera, kView, pixel_of(camera, sk.centers[e.joint], kView), 25.0f, seen,
@@ -408,18 +408,18 @@ TEST(BindingEditor, EditSaveLoadBindsLevelOneExactlyAndLeavesTheOtherLevelsAlone
   e.editor.save(file);
   const BindingTables loaded = load_binding_tables(read_text(repo_data("part_joints.json")), read_text(file),
                                                    "part_joints.json", file.string());
-  ASSERT_EQ(loaded.overrides.size(), default_binding_tables().overrides.size() + 1);
+  ASSERT_EQ(loaded.overrides.size(), shipped_binding_tables().overrides.size() + 1);
   EXPECT_EQ(loaded.overrides.back().name, "left hip front");
   EXPECT_EQ(loaded.overrides.back().mesh_vertices, shipped->levels[1].mesh.vertex_count());
-  const auto& levels = default_body().levels;
+  const auto& levels = shipped_body_levels().levels;
   expect_same_binding(bind_three_step(levels[1], sk, loaded), edited, "level 1 from the saved file");
   expect_same_binding(bind_three_step(levels[0], sk, loaded), shipped->levels[0].binding, "level 0");
   expect_same_binding(bind_three_step(levels[2], sk, loaded), shipped->levels[2].binding, "level 2");
 
   // The same through load_binding_overrides_file and bind_body, cage included.
-  const BindingTables from_file = load_binding_overrides_file(file, default_binding_tables());
-  EXPECT_EQ(from_file.part_joints, default_binding_tables().part_joints);
-  const auto rebound = bind_body(levels, sk, BindingMethod::ThreeStep, &default_body().cage, &from_file);
+  const BindingTables from_file = load_binding_overrides_file(file, shipped_binding_tables());
+  EXPECT_EQ(from_file.part_joints, shipped_binding_tables().part_joints);
+  const auto rebound = bind_body(levels, sk, BindingMethod::ThreeStep, &shipped_body_levels().cage, &from_file);
   expect_same_binding(rebound->levels[1].binding, edited, "bind_body level 1");
   expect_same_binding(rebound->levels[0].binding, shipped->levels[0].binding, "bind_body level 0");
   ASSERT_TRUE(rebound->cage && shipped->cage);
@@ -442,13 +442,13 @@ TEST(BindingEditor, UndoRestoresTheBindingBitExactly) {
     EXPECT_EQ(e.editor.binding().joints[v][0], root);
     EXPECT_EQ(e.editor.binding().weights[v][0], 1.0f);
   }
-  EXPECT_EQ(e.editor.tables().overrides.size(), default_binding_tables().overrides.size() + 2);
-  EXPECT_EQ(e.editor.tables().overrides[default_binding_tables().overrides.size()].name, "edit 1");
+  EXPECT_EQ(e.editor.tables().overrides.size(), shipped_binding_tables().overrides.size() + 2);
+  EXPECT_EQ(e.editor.tables().overrides[shipped_binding_tables().overrides.size()].name, "edit 1");
   EXPECT_TRUE(e.editor.undo());
   expect_same_binding(e.editor.binding(), after_first, "after one undo");
   EXPECT_TRUE(e.editor.undo());
   expect_same_binding(e.editor.binding(), shipped->levels[2].binding, "after two undos");
-  EXPECT_EQ(e.editor.tables().overrides.size(), default_binding_tables().overrides.size());
+  EXPECT_EQ(e.editor.tables().overrides.size(), shipped_binding_tables().overrides.size());
   EXPECT_EQ(e.editor.edit_count(), 0u);
   EXPECT_FALSE(e.editor.undo());
 }
@@ -457,7 +457,7 @@ TEST(BindingEditor, RefusesAnEmptySelectionOrABadJointAndChangesNothing) {
   const auto shipped = default_bound_body();
   const Skeleton sk = load_default_humanoid().skeleton;
   const BodyLevel& l = shipped->levels[2];
-  BindingEditor editor(l.mesh, sk, l.binding, default_binding_tables());
+  BindingEditor editor(l.mesh, sk, l.binding, shipped_binding_tables());
   EXPECT_FALSE(editor.bind_selection(sk.find_joint("l_hip"))) << "empty selection";
   editor.selection().set(7, true);
   EXPECT_FALSE(editor.bind_selection(-1));
@@ -466,16 +466,16 @@ TEST(BindingEditor, RefusesAnEmptySelectionOrABadJointAndChangesNothing) {
   editor.selection().set(1, true);
   EXPECT_FALSE(editor.bind_selection(0)) << "a selection of another mesh";
   EXPECT_EQ(editor.edit_count(), 0u);
-  EXPECT_EQ(editor.tables().overrides.size(), default_binding_tables().overrides.size());
+  EXPECT_EQ(editor.tables().overrides.size(), shipped_binding_tables().overrides.size());
   expect_same_binding(editor.binding(), l.binding, "refused edits");
   // A joint whose name an overrides file cannot carry (not H-Anim).
   Skeleton odd = sk;
   odd.joint_names[sk.find_joint("l_knee")] = "my_knee";
-  BindingEditor odd_editor(l.mesh, odd, l.binding, default_binding_tables());
+  BindingEditor odd_editor(l.mesh, odd, l.binding, shipped_binding_tables());
   odd_editor.selection().set(7, true);
   EXPECT_FALSE(odd_editor.bind_selection(sk.find_joint("l_knee")));
   EXPECT_TRUE(odd_editor.bind_selection(sk.find_joint("l_hip")));
-  EXPECT_THROW(BindingEditor(l.mesh, sk, shipped->levels[1].binding, default_binding_tables()), std::invalid_argument);
+  EXPECT_THROW(BindingEditor(l.mesh, sk, shipped->levels[1].binding, shipped_binding_tables()), std::invalid_argument);
 }
 
 TEST(BindingEditor, WeightColoursRunFromBlueToRedAndShowTheSelection) {
@@ -496,7 +496,7 @@ TEST(BindingEditor, WeightColoursRunFromBlueToRedAndShowTheSelection) {
 
   const Skeleton sk = load_default_humanoid().skeleton;
   const BodyLevel& l = default_bound_body()->levels[2];
-  BindingEditor editor(l.mesh, sk, l.binding, default_binding_tables());
+  BindingEditor editor(l.mesh, sk, l.binding, shipped_binding_tables());
   const int elbow = sk.find_joint("l_elbow");
   std::vector<std::uint32_t> rgba(l.mesh.vertex_count());
   editor.selection().set(0, true);
@@ -586,7 +586,7 @@ TEST(BindingOverridesJson, RandomSelectionsRoundTripExactly) {
 
 TEST(BindingOverridesJson, MeshVerticesSkipsOtherMeshesAndRangeChecksItsOwn) {
   const Skeleton sk = load_default_humanoid().skeleton;
-  const auto& levels = default_body().levels;
+  const auto& levels = shipped_body_levels().levels;
   const auto level1 = static_cast<std::uint32_t>(levels[1].vertex_count());
   const std::string parts = read_text(repo_data("part_joints.json"));
   // An id valid on level 0 only, tagged as a level-1 list: level 1 rejects it, level 0 and 2 skip the entry.
@@ -643,7 +643,7 @@ TEST(BindingOverridesJson, OverridesFileErrorsNameTheFile) {
                                      std::pair{empty, std::string("empty file")},
                                      std::pair{broken, std::string("overrides[0] 'x'")}}) {
     try {
-      load_binding_overrides_file(file, default_binding_tables());
+      load_binding_overrides_file(file, shipped_binding_tables());
       ADD_FAILURE() << "no error for " << file;
     } catch (const LoadError& e) {
       EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();

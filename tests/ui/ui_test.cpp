@@ -384,7 +384,7 @@ TEST(BindingEditorSession, ClickBindShowsSavesAndUndoes) {
   b.save_requested = true;
   rig.session.apply_binding_requests();
   ASSERT_TRUE(std::filesystem::exists(path)) << rig.session.panel().last_message;
-  const BindingTables reloaded = load_binding_overrides_file(path.string(), default_binding_tables());
+  const BindingTables reloaded = load_binding_overrides_file(path.string(), shipped_binding_tables());
   // set_body replaced the rig: fetch its parts afresh.
   const Rig& edited_rig = rig.session.scene().rig();
   const SkinBinding rebound = bind_three_step(edited_rig.body->levels[0].mesh, edited_rig.skeleton, reloaded);
@@ -506,7 +506,7 @@ TEST(BindingEditorSession, EditsSurviveANewCrowdAndFollowTheLevel) {
   rig.session.apply_binding_requests();
   EXPECT_TRUE(b.active);
   EXPECT_EQ(b.level, 2);
-  EXPECT_EQ(rig.session.binding_tables().overrides.size(), default_binding_tables().overrides.size() + 1);
+  EXPECT_EQ(rig.session.binding_tables().overrides.size(), shipped_binding_tables().overrides.size() + 1);
   set_detail_level(rig.session.scene(), DetailLevel::automatic());
   rig.session.apply_binding_requests();
   EXPECT_FALSE(b.active) << "weights cannot be edited on the automatic mix of levels";

@@ -1,0 +1,228 @@
+// The MakeHuman-derived default body (rig/makehuman_body.h) and its shipped source (io/makehuman_pack.h): the
+// pack's round trip and bad input, the shipped file against a fresh pack of ../shared/data's hm08 folder, and the
+// derived levels: exact budgets, closed 2-manifolds, 53 parts, fitted to the skeleton (crown, feet on the sites,
+// hands clear of the thighs), following another skeleton's size, deterministic.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+#include "io/hanim_loader.h"
+#include "io/load_error.h"
+#include "io/makehuman.h"
+#include "io/makehuman_pack.h"
+#include "io/mesh_check.h"
+#include "rig/makehuman_body.h"
+#include "rig/surface_simplify.h"
+
+namespace strata {
+namespace {
+
+const std::filesystem::path kMakeHuman = std::filesystem::path(STRATA_SHARED_DATA) / "makehuman_hm08";
+
+const MakeHumanSource& source() {
+  static const MakeHumanSource s = shipped_makehuman_source();
+  return s;
+}
+
+glm::vec3 site(const Skeleton& s, const char* name) {
+  for (const SkeletonSite& site : s.sites)
+    if (site.name == name) return site.position;
+  ADD_FAILURE() << "no site " << name;
+  return glm::vec3(0.0f);
+}
+
+bool is_part(const Mesh& m, std::size_t v, std::initializer_list<const char*> names) {
+  const std::string& part = m.part_names[m.part[v]];
+  for (const char* n : names)
+    if (part == n) return true;
+  return false;
+}
+
+// ---- The pack ----------------------------------------------------------------------------------------------------
+
+TEST(MakeHumanPack, ShippedSourceIsTheClosedHm08Body) {
+  const MakeHumanSource& s = source();
+  EXPECT_EQ(s.positions.size(), 13380u);
+  EXPECT_EQ(s.triangles.size(), 3u * 26756u);
+  EXPECT_TRUE(is_closed_manifold(s.triangles, s.positions.size())) << "the hm08 body group is closed, genus 0";
+  EXPECT_EQ(s.joint_centers.size(), load_default_humanoid().skeleton.joint_count());
+  std::set<std::uint16_t> parts(s.part.begin(), s.part.end());
+  EXPECT_EQ(parts.size(), 53u);
+  for (std::size_t v = 0; v < s.positions.size(); ++v) {
+    float sum = 0.0f;
+    for (float w : s.skin.weights[v]) sum += w;
+    ASSERT_NEAR(sum, 1.0f, 1e-5f) << v;
+  }
+}
+
+TEST(MakeHumanPack, RoundTripKeepsTopologyPartsAndQuantisedGeometry) {
+  const MakeHumanSource& s = source();
+  const MakeHumanSource back = unpack_makehuman_source(pack_makehuman_source(s), "round trip");
+  EXPECT_EQ(back.triangles, s.triangles);
+  EXPECT_EQ(back.part, s.part);
+  EXPECT_EQ(back.skin.joints, s.skin.joints);
+  ASSERT_EQ(back.positions.size(), s.positions.size());
+  for (std::size_t v = 0; v < s.positions.size(); ++v) {
+    // Re-quantising quantised values lands on the same steps: 0.03 mm at most, and in practice exact.
+    ASSERT_LT(glm::length(back.positions[v] - s.positions[v]), 5e-5f) << v;
+    for (int k = 0; k < kMaxInfluences; ++k) ASSERT_NEAR(back.skin.weights[v][k], s.skin.weights[v][k], 2.0f / 255.0f);
+  }
+  EXPECT_EQ(back.joint_centers, s.joint_centers);
+}
+
+TEST(MakeHumanPack, ShippedFileIsAFreshPackOfTheSharedFolder) {
+  if (!std::filesystem::exists(kMakeHuman / "base.obj")) GTEST_SKIP() << "test data absent: " << kMakeHuman;
+  const MakeHumanSource fresh = unpack_makehuman_source(
+      pack_makehuman_source(makehuman_source_from(load_makehuman(kMakeHuman))), "fresh");
+  const MakeHumanSource& shipped = source();
+  EXPECT_EQ(fresh.positions, shipped.positions) << "rerun build/strata_pack_makehuman (apps/pack_makehuman.cpp)";
+  EXPECT_EQ(fresh.triangles, shipped.triangles);
+  EXPECT_EQ(fresh.part, shipped.part);
+  EXPECT_EQ(fresh.skin.joints, shipped.skin.joints);
+  EXPECT_EQ(fresh.skin.weights, shipped.skin.weights);
+  EXPECT_EQ(fresh.joint_centers, shipped.joint_centers);
+}
+
+TEST(MakeHumanPack, BadInputIsOneLineNamingTheSourceAndWhatIsWrong) {
+  const std::string good = pack_makehuman_source(source());
+  auto expect_error = [](const std::string& bytes, const std::string& needle) {
+    try {
+      (void)unpack_makehuman_source(bytes, "body.bin");
+      ADD_FAILURE() << "no error for " << needle;
+    } catch (const LoadError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("body.bin: ", 0), 0u) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  };
+  expect_error("", "truncated");
+  expect_error("STMHPK02" + good.substr(8), "bad magic");
+  expect_error(good.substr(0, good.size() - 10), "the header says");
+  std::string corrupt = good;
+  for (std::size_t i = 40; i < 80; ++i) corrupt[i] = static_cast<char>(corrupt[i] ^ 0x5a);
+  expect_error(corrupt, "corrupt zlib stream");
+
+  // Well-formed streams carrying bad content.
+  MakeHumanSource bad = source();
+  bad.triangles[7] = static_cast<std::uint32_t>(bad.positions.size());
+  expect_error(pack_makehuman_source(bad), "triangle index 13380 >= 13380 vertices");
+  bad = source();
+  bad.part[3] = 60;
+  expect_error(pack_makehuman_source(bad), "part 60");
+  bad = source();
+  bad.skin.joints[5][0] = 40;
+  expect_error(pack_makehuman_source(bad), "influence joint 40");
+  bad = source();
+  bad.skin.weights[9] = {0.0f, 0.0f, 0.0f, 0.0f};
+  expect_error(pack_makehuman_source(bad), "vertex 9 has no weight");
+}
+
+// ---- The derived body ----------------------------------------------------------------------------------------------
+
+const BodyLevels& body() { return makehuman_default_body(); }
+
+TEST(MakeHumanBody, ExactlyThePapersVertexCountsAndAClosedManifoldEverywhere) {
+  const std::uint32_t expected[3] = {17953, 8923, 5133};
+  for (int l = 0; l < 4; ++l) {
+    const Mesh& m = l < 3 ? body().levels[static_cast<std::size_t>(l)] : body().cage;
+    SCOPED_TRACE(m.name);
+    EXPECT_EQ(m.vertex_count(), l < 3 ? expected[l] : 1800u);
+    EXPECT_TRUE(is_closed_manifold(m.triangles, m.vertex_count()));
+    EXPECT_NO_THROW(validate_mesh(m, m.name));
+    EXPECT_EQ(m.normals.size(), m.vertex_count());
+    for (const glm::vec3& p : m.positions) ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+    if (l < 3) {
+      std::set<std::uint16_t> parts(m.part.begin(), m.part.end());
+      EXPECT_EQ(parts.size(), 53u);
+    }
+  }
+}
+
+TEST(MakeHumanBody, FitsTheSkeletonCrownSolesFeetAndHands) {
+  const Skeleton& sk = load_default_humanoid().skeleton;
+  const Mesh& m = body().levels[0];
+  float floor = std::numeric_limits<float>::max(), crown = -floor;
+  for (const glm::vec3& p : m.positions) floor = std::min(floor, p.y), crown = std::max(crown, p.y);
+  EXPECT_NEAR(floor, 0.0f, 1e-3f) << "the soles stay on the floor";
+  EXPECT_NEAR(crown, site(sk, "skull_tip").y, 5e-3f) << "the crown on the skull tip";
+
+  // Each foot's rearmost and foremost points on the skeleton's heel and toe sites, where the walk plants them.
+  for (const char side : {'l', 'r'}) {
+    const std::string foot = std::string(1, side) + "Foot", toe = std::string(1, side) + "Toe";
+    float heel_z = std::numeric_limits<float>::max(), toe_z = -heel_z;
+    for (std::size_t v = 0; v < m.vertex_count(); ++v)
+      if (is_part(m, v, {foot.c_str(), toe.c_str()})) heel_z = std::min(heel_z, m.positions[v].z), toe_z = std::max(toe_z, m.positions[v].z);
+    EXPECT_NEAR(heel_z, site(sk, side == 'l' ? "l_calcaneous_post_pt" : "r_calcaneous_post_pt").z, 5e-3f) << side;
+    EXPECT_NEAR(toe_z, site(sk, side == 'l' ? "l_forefoot_tip" : "r_forefoot_tip").z, 5e-3f) << side;
+  }
+
+  // The arms come down from the A-pose: every hand vertex below the elbow, the wrist's skin around its joint.
+  const glm::vec3 wrist = sk.centers[static_cast<std::size_t>(sk.find_joint("l_wrist"))];
+  const glm::vec3 elbow = sk.centers[static_cast<std::size_t>(sk.find_joint("l_elbow"))];
+  glm::vec3 hand_sum(0.0f);
+  int hand_count = 0;
+  for (std::size_t v = 0; v < m.vertex_count(); ++v)
+    if (is_part(m, v, {"lHand"})) {
+      hand_sum += m.positions[v];
+      ++hand_count;
+      EXPECT_LT(m.positions[v].y, elbow.y);
+    }
+  ASSERT_GT(hand_count, 0);
+  EXPECT_LT(glm::length(hand_sum / float(hand_count) - wrist), 0.08f) << "the palm hangs below the wrist";
+
+  // Hands clear of the thighs and hips at rest (a hand sunk into the thigh stays there through the walk).
+  float closest = std::numeric_limits<float>::max();
+  for (std::size_t h = 0; h < m.vertex_count(); ++h) {
+    if (m.positions[h].x < 0.05f || !is_part(m, h, {"lHand", "lThumb1", "lThumb2", "lThumb3", "lIndex3", "lMid3", "lRing3", "lPinky3"}))
+      continue;
+    for (std::size_t b = 0; b < m.vertex_count(); ++b)
+      if (is_part(m, b, {"hip", "lThigh", "abdomen"})) closest = std::min(closest, glm::length(m.positions[h] - m.positions[b]));
+  }
+  EXPECT_GT(closest, 1e-3f);
+}
+
+TEST(MakeHumanBody, FollowsAnotherSkeletonsSize) {
+  // The default skeleton scaled by 1.1 about the floor: the body grows with it.
+  Skeleton big = load_default_humanoid().skeleton;
+  for (glm::vec3& c : big.centers) c *= 1.1f;
+  for (SkeletonSite& s : big.sites) s.position *= 1.1f;
+  const std::vector<glm::vec3> fitted = fit_makehuman_to_skeleton(source(), big);
+  const std::vector<glm::vec3> normal = fit_makehuman_to_skeleton(source(), load_default_humanoid().skeleton);
+  float crown_big = 0.0f, crown = 0.0f;
+  for (const glm::vec3& p : fitted) {
+    crown_big = std::max(crown_big, p.y);
+    ASSERT_TRUE(std::isfinite(p.x + p.y + p.z));
+  }
+  for (const glm::vec3& p : normal) crown = std::max(crown, p.y);
+  EXPECT_NEAR(crown_big / crown, 1.1f, 0.005f);
+
+  try {
+    (void)fit_makehuman_to_skeleton(source(), Skeleton{});
+    ADD_FAILURE() << "no error for a skeleton without the default joints";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("lacks joint 'HumanoidRoot'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MakeHumanBody, DerivationIsDeterministicAndTheCacheGivesItBack) {
+  // makehuman_default_body() may come from the disk cache; derived again here it must be bit-identical.
+  const BodyLevels again = derive_makehuman_body(source(), load_default_humanoid().skeleton);
+  for (int l = 0; l < 3; ++l) {
+    EXPECT_EQ(again.levels[static_cast<std::size_t>(l)].positions, body().levels[static_cast<std::size_t>(l)].positions);
+    EXPECT_EQ(again.levels[static_cast<std::size_t>(l)].triangles, body().levels[static_cast<std::size_t>(l)].triangles);
+    EXPECT_EQ(again.levels[static_cast<std::size_t>(l)].part, body().levels[static_cast<std::size_t>(l)].part);
+  }
+  EXPECT_EQ(again.cage.positions, body().cage.positions);
+}
+
+}  // namespace
+}  // namespace strata
