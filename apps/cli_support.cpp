@@ -231,6 +231,32 @@ void add_quality_option(CLI::App& cmd, RenderQuality& quality) {
       ->check(low_or_high)->default_str(quality_name(quality));
 }
 
+const char* renderer_name(RenderBackend backend) { return backend == RenderBackend::RayTraced ? "embree" : "gl"; }
+
+void add_renderer_option(CLI::App& cmd, RenderBackend& backend) {
+  const CLI::Validator gl_or_embree(
+      [](std::string& value) -> std::string {
+        if (value == "gl" || value == "embree") return {};
+        return "must be gl or embree, got '" + value + "'";
+      },
+      "gl|embree");
+  cmd.add_option_function<std::string>(
+         "--renderer",
+         [&backend](const std::string& value) { backend = value == "embree" ? RenderBackend::RayTraced : RenderBackend::Gl; },
+         "Who draws the frames: gl (the GL passes, 4x MSAA) or embree (the CPU ray tracer: skinned meshes, props and "
+         "ground lit as --quality high, one ray per pixel; much faster for large headless crowds; needs a mesh "
+         "--level, not auto or impostor)")
+      ->check(gl_or_embree)->default_str(renderer_name(backend));
+}
+
+std::string check_renderer_level(RenderBackend backend, const DetailLevel& level, bool skeleton_overlay) {
+  if (backend != RenderBackend::RayTraced) return {};
+  if (level.is_none() || level.is_automatic() || level.is_impostor())
+    return "--renderer embree traces skinned meshes: use --level 0, 1, 2 or S1-S3";
+  if (skeleton_overlay) return "--renderer embree draws no skeletons: drop --skeleton-overlay or use --renderer gl";
+  return {};
+}
+
 std::unique_ptr<CrowdRenderer> make_checked_renderer(GlContext& context, int width, int height, std::string& error) {
   error = check_render_size(context.limits(), width, height);
   if (!error.empty()) return nullptr;

@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "components/detail_level.h"
 #include "render/crowd_renderer.h"
 #include "render/gl_context.h"
 
@@ -80,6 +81,11 @@ std::string render_target_error(int width, int height, const GlContext::Limits& 
 // once with the flags named. Null, with `error` set, on failure.
 // --quality low|high on `cmd` (render/render_options.h RenderQuality), with `quality`'s value as the default.
 void add_quality_option(CLI::App& cmd, RenderQuality& quality);
+// --renderer gl|embree (render/render_options.h RenderBackend) and its name in summaries.
+void add_renderer_option(CLI::App& cmd, RenderBackend& backend);
+const char* renderer_name(RenderBackend backend);
+// Why `level` or the overlay cannot be drawn by `backend` (the ray tracer draws meshes only); empty when they can.
+std::string check_renderer_level(RenderBackend backend, const DetailLevel& level, bool skeleton_overlay);
 const char* quality_name(RenderQuality quality);
 std::unique_ptr<CrowdRenderer> make_checked_renderer(GlContext& context, int width, int height, std::string& error);
 

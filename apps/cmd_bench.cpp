@@ -31,15 +31,17 @@ struct BenchOptions {
   bool render = false;
   int width = 1280, height = 720;
   RenderQuality quality = RenderQuality::Low;
+  RenderBackend renderer = RenderBackend::Gl;
 };
 
 // The crowd render pass (skinned bodies streamed every frame, one multi-draw per level) against the fastest way
 // to draw the same triangles: each level's mesh uploaded once and drawn with glDrawElementsInstanced, one copy per
 // walker at its position. Same target, material and camera; ground and skeletons off; each timed to glFinish.
 nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& context, CrowdRenderer& renderer) {
-  // High quality keeps the ground: the shadows fall on it, and its shading is part of what the setting costs.
   renderer.options().quality = o.quality;
-  renderer.options().draw_ground = o.quality == RenderQuality::High;
+  renderer.options().backend = o.renderer;
+  // High quality keeps the ground, and so does the ray tracer, whose lighting is always high quality.
+  renderer.options().draw_ground = o.quality == RenderQuality::High || o.renderer == RenderBackend::RayTraced;
   renderer.options().draw_skeleton = false;
   const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
   OrbitCamera camera;
@@ -103,6 +105,7 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& cont
   j["width"] = o.width;
   j["height"] = o.height;
   j["quality"] = quality_name(o.quality);
+  j["renderer"] = renderer_name(o.renderer);
   j["pass_ms"] = pass_ms;
   j["crowd_triangles_per_second"] = crowd_rate;
   j["raw_instanced_triangles_per_second"] = raw_rate;
@@ -119,6 +122,11 @@ int run_bench(const BenchOptions& o) {
   if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
     print_error("bench", why);
     return kExitFailure;
+  }
+  if (const std::string why = o.render ? check_renderer_level(o.renderer, o.scene.level, false) : std::string();
+      !why.empty()) {
+    print_error("bench", why);
+    return kExitUsage;
   }
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
@@ -227,6 +235,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--render", o->render,
                 "Also time the crowd render pass (headless EGL) against raw instanced drawing of the same triangles");
   add_quality_option(*cmd, o->quality);
+  add_renderer_option(*cmd, o->renderer);
   cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->callback([o, &exit_code] { exit_code = run_bench(*o); });

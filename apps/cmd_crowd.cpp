@@ -44,6 +44,7 @@ struct CrowdOptions {
   std::size_t frames = 60;
   std::string out = "out/crowd";
   RenderQuality quality = RenderQuality::High;
+  RenderBackend renderer = RenderBackend::Gl;
   int width = 1280;
   int height = 720;
   float fps = 30.0f;
@@ -75,6 +76,10 @@ int run_crowd(const CrowdOptions& o) {
   // Everything that can be refused is refused before any work: the output directory, the memory the crowd
   // needs, the inputs, then (once a context exists) the image size.
   if (!check_outputs("crowd", {{"--out", out, true}})) return kExitFailure;
+  if (const std::string why = check_renderer_level(o.renderer, o.scene.level, o.skeleton_overlay); !why.empty()) {
+    print_error("crowd", why);
+    return kExitUsage;
+  }
   if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
     print_error("crowd", why);
     return kExitFailure;
@@ -107,6 +112,7 @@ int run_crowd(const CrowdOptions& o) {
   }
   CrowdRenderer& renderer = *renderer_owner;
   renderer.options().quality = o.quality;
+  renderer.options().backend = o.renderer;
   const OutputClaim claim = claim_crowd_output_dir(out);
   if (!claim.refused.empty()) {
     print_error("crowd", claim.refused);
@@ -262,6 +268,7 @@ int run_crowd(const CrowdOptions& o) {
                       : clip == kAllClips ? nlohmann::json("all") : nlohmann::json(nullptr);
     summary["gl_renderer"] = context->renderer();
     summary["quality"] = quality_name(o.quality);
+    summary["renderer"] = renderer_name(o.renderer);
     summary["gl_version"] = context->version();
     summary["wall_s"] = wall;
     summary["fps"] = wall > 0 ? static_cast<double>(frames_done) / wall : 0.0;
@@ -328,6 +335,7 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
       ->check(whole_in(1, 100'000'000, true));
   cmd->add_option("--out,-o", o->out, "Output directory")->capture_default_str();
   add_quality_option(*cmd, o->quality);
+  add_renderer_option(*cmd, o->renderer);
   cmd->add_option("--width", o->width, "Image width")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--height", o->height, "Image height")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--skip", o->skip_seconds,

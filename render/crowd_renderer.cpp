@@ -18,6 +18,7 @@
 #include "render/props_pass.h"
 #include "render/reference_pass.h"
 #include "render/render_target.h"
+#include "render/ray_tracer.h"
 #include "render/shadow_pass.h"
 #include "render/skeleton_pass.h"
 
@@ -74,6 +75,11 @@ struct CrowdRenderer::Impl {
   PropsPass props;
   std::optional<ReferencePass> reference;  // built on the benchmark's first call
   std::optional<ShadowPass> shadow;        // built on the first RenderQuality::High frame
+  std::optional<RayTracer> tracer;         // built on the first RenderBackend::RayTraced frame
+  std::vector<std::uint8_t> traced;        // that frame's image, which read_rgba() returns
+  bool last_traced = false;
+  std::vector<PropVertex> props_cpu;       // the props as given, for the ray tracer
+  std::uint64_t props_cpu_key = 0;
   Profiler* profiler = nullptr;
   std::size_t triangles_drawn = 0;
   std::vector<glm::vec3> ground_points;  // scratch
@@ -95,6 +101,8 @@ std::size_t CrowdRenderer::impostors_drawn() const { return impl_->body.impostor
 void CrowdRenderer::set_props(std::uint64_t key, std::span<const PropVertex> triangles) {
   if (triangles.empty()) impl_->props.clear();
   else impl_->props.upload(key, triangles);
+  impl_->props_cpu.assign(triangles.begin(), triangles.end());
+  impl_->props_cpu_key = triangles.empty() ? 0 : key;
 }
 std::uint64_t CrowdRenderer::props_key() const { return impl_->props.empty() ? 0 : impl_->props.key(); }
 
@@ -112,6 +120,23 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
 void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view, const glm::mat4& projection,
                            const BodySource& bodies) {
   Impl& r = *impl_;
+  if (r.options.backend == RenderBackend::RayTraced) {
+    // The ray tracer checks its own inputs first; it draws bodies, props and ground, never skeletons.
+    if (!r.tracer) r.tracer.emplace();
+    r.tracer->set_props(r.props_cpu_key, r.props_cpu);
+    std::span<const glm::vec3> points = drawn_joint_positions(input);
+    if (!input.ground_points.empty()) {
+      r.ground_points.assign(points.begin(), points.end());
+      r.ground_points.insert(r.ground_points.end(), input.ground_points.begin(), input.ground_points.end());
+      points = r.ground_points;
+    }
+    r.tracer->render(bodies, points, view, projection, r.options, r.target.width(), r.target.height(), r.traced,
+                     r.profiler);
+    r.triangles_drawn = r.tracer->triangles_traced();
+    r.last_traced = true;
+    return;
+  }
+  r.last_traced = false;
   // Every input is checked before the frame starts, so a bad one throws with the last image intact. Then ground,
   // skeletons, bodies: the order the single-file renderer drew in, which the frames' bytes depend on where
   // depth ties (a joint sphere and a body surface at the same depth keep whichever came first, GL_LESS).
@@ -190,7 +215,10 @@ void CrowdRenderer::render_instanced_reference(const BodyDrawInput& mesh, std::s
 }
 
 void CrowdRenderer::finish() const { glFinish(); }
-void CrowdRenderer::read_rgba(std::vector<std::uint8_t>& out) const { impl_->target.read_rgba(out); }
+void CrowdRenderer::read_rgba(std::vector<std::uint8_t>& out) const {
+  if (impl_->last_traced) out = impl_->traced;
+  else impl_->target.read_rgba(out);
+}
 unsigned CrowdRenderer::output_framebuffer() const { return impl_->target.output_framebuffer(); }
 void CrowdRenderer::blit_to_default_framebuffer(int width, int height) const {
   impl_->target.blit_to_default_framebuffer(width, height);

@@ -13,8 +13,14 @@ namespace strata {
 // (render/appearance.h), ACES tone mapping and sRGB output.
 enum class RenderQuality { Low, High };
 
+// Who draws a headless frame: the GL passes (every command and the viewer), or the Embree ray tracer
+// (render/ray_tracer.h: skinned meshes, props and ground at RenderQuality::High's lighting, one ray per pixel;
+// `--renderer embree` on crowd and bench). The viewer always draws with GL.
+enum class RenderBackend { Gl, RayTraced };
+
 struct RenderOptions {
   RenderQuality quality = RenderQuality::Low;
+  RenderBackend backend = RenderBackend::Gl;
   // The sun of RenderQuality::High: towards it (world, normalised when used), an afternoon sun from behind the
   // default camera's left so that shadows fall towards the viewer's right, long enough to read at 45 degrees.
   glm::vec3 to_sun{-0.45f, 0.78f, 0.42f};

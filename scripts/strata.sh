@@ -27,6 +27,7 @@ PACKAGES=(
   xvfb xauth
   ffmpeg
   librecast-dev
+  libembree-dev
 )
 
 install_missing() {

@@ -241,6 +241,28 @@ TEST(StrataReport, SkinWritesLevelsBindingAndQuality) {
   }
 }
 
+TEST(StrataCrowd, RendererEmbreeTracesMeshLevelsAndRefusesTheOthers) {
+  const fs::path out = scratch("renderer_embree");
+  Result r = run("crowd --renderer embree --walkers 2 --frames 2 --width 96 --height 64 --level 2 --no-mp4 "
+                 "--table1-frames 0 --no-progress --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary.at("renderer"), "embree");
+  EXPECT_TRUE(fs::exists(out / "frame_0000.png"));
+  const std::string profile((std::istreambuf_iterator<char>(std::ifstream(out / "profile.csv").rdbuf())),
+                            std::istreambuf_iterator<char>());
+  EXPECT_NE(profile.find("trace"), std::string::npos) << "the tracer's passes are timed";
+  for (const char* level : {"auto", "impostor", "-1"}) {
+    Result bad = run(std::string("crowd --renderer embree --frames 1 --no-progress --level ") + level + " --out " +
+                     scratch(std::string("renderer_bad") + level).string());
+    EXPECT_EQ(bad.status, 2) << level << ": " << bad.out;
+    EXPECT_NE(bad.out.find("--renderer embree"), std::string::npos) << bad.out;
+  }
+  Result unknown = run("crowd --renderer vulkan --frames 1 --no-progress --out " + scratch("renderer_vk").string());
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.out.find("--renderer"), std::string::npos) << unknown.out;
+}
+
 TEST(StrataCrowd, SkinningModeFlagDrawsEveryModeAndRefusesOthers) {
   for (const char* mode : {"dqs", "cor"}) {
     fs::path out = scratch(std::string("skinning_") + mode);
