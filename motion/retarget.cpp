@@ -7,25 +7,11 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "components/shortest_arc.h"
 #include "motion/bvh_naming.h"
 
 namespace strata {
 namespace {
-
-// Shortest-arc rotation taking unit direction `from` onto unit direction `to`.
-glm::quat rotation_between(glm::vec3 from, glm::vec3 to) {
-  from = glm::normalize(from);
-  to = glm::normalize(to);
-  const float d = glm::dot(from, to);
-  if (d < -0.999999f) {
-    // Opposite: any axis perpendicular to `from` will do; pick the one least aligned with it.
-    glm::vec3 axis = glm::cross(glm::vec3(1, 0, 0), from);
-    if (glm::dot(axis, axis) < 1e-6f) axis = glm::cross(glm::vec3(0, 1, 0), from);
-    return glm::angleAxis(3.14159265f, glm::normalize(axis));
-  }
-  const glm::vec3 c = glm::cross(from, to);
-  return glm::normalize(glm::quat(1.0f + d, c.x, c.y, c.z));
-}
 
 // Rest position of an aim target: an H-Anim joint centre or site.
 glm::vec3 hanim_point(const Skeleton& s, const std::string& name) {
@@ -215,7 +201,7 @@ RetargetResult retarget_bvh(const BvhMotion& motion, const Skeleton& skeleton, c
         bvh_dir = bvh_rest[aim] - bvh_rest[b];
       }
       const glm::vec3 hanim_dir = bone_aim_point(skeleton, h, m.hanim_aim) - skeleton.centers[h];
-      bone.align = rotation_between(hanim_dir, bvh_dir);
+      bone.align = shortest_arc(hanim_dir, bvh_dir);
       bone.aimed = true;
       bone.hanim_dir = glm::normalize(hanim_dir);
     }

@@ -5,6 +5,7 @@
 #include "io/atomic_file.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -181,6 +182,18 @@ void save_body_cache(const std::filesystem::path& file, std::uint64_t key, const
     atomic.commit();
   } catch (const std::exception&) {
   }
+}
+
+BodyLevels cached_body_levels(std::string_view stem, std::uint64_t key, const std::function<BodyLevels()>& make) {
+  const auto directory = body_cache_directory();
+  char hex[20];
+  std::snprintf(hex, sizeof hex, "_%016llx.bin", static_cast<unsigned long long>(key));
+  const std::filesystem::path file = directory ? *directory / (std::string(stem) + hex) : std::filesystem::path();
+  if (directory)
+    if (std::optional<BodyLevels> cached = load_body_cache(file, key)) return std::move(*cached);
+  BodyLevels made = make();
+  if (directory) save_body_cache(file, key, made);
+  return made;
 }
 
 }  // namespace strata

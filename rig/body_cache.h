@@ -6,8 +6,10 @@
 // stale, truncated or corrupt file is ignored and regenerated. STRATA_NO_BODY_CACHE=1 turns the cache off.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "components/skeleton.h"
@@ -35,5 +37,9 @@ void save_float_cache(const std::filesystem::path& file, const char (&magic)[8],
 std::optional<BodyLevels> load_body_cache(const std::filesystem::path& file, std::uint64_t key);
 // Stores `levels` under `key`; failures are silent (the cache is an optimisation).
 void save_body_cache(const std::filesystem::path& file, std::uint64_t key, const BodyLevels& levels);
+
+// The body stored as "<stem>_<key in hex>.bin" in the cache directory, else make()'s, which is then stored there
+// (the shipped bodies: rig/body_generator.h default_body, rig/makehuman_body.h makehuman_default_body).
+BodyLevels cached_body_levels(std::string_view stem, std::uint64_t key, const std::function<BodyLevels()>& make);
 
 }  // namespace strata

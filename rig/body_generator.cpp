@@ -666,15 +666,8 @@ const BodyLevels& default_body() {
     constexpr std::uint32_t kGeneratorVersion = 5;
     const Skeleton skeleton = load_default_humanoid().skeleton;
     const BodyOptions options;
-    const auto directory = body_cache_directory();
-    const std::uint64_t key = body_cache_key(skeleton, options, kGeneratorVersion);
-    char name[40];
-    std::snprintf(name, sizeof name, "default_body_%016llx.bin", static_cast<unsigned long long>(key));
-    if (directory)
-      if (std::optional<BodyLevels> cached = load_body_cache(*directory / name, key)) return std::move(*cached);
-    BodyLevels generated = generate_default_body(skeleton, options);
-    if (directory) save_body_cache(*directory / name, key, generated);
-    return generated;
+    return cached_body_levels("default_body", body_cache_key(skeleton, options, kGeneratorVersion),
+                              [&] { return generate_default_body(skeleton, options); });
   }();
   return body;
 }

@@ -13,6 +13,7 @@
 #include <opensubdiv/far/primvarRefiner.h>
 
 #include "components/fnv_hasher.h"
+#include "components/shortest_arc.h"
 #include "data/embedded.h"
 #include "io/hanim_loader.h"
 #include "rig/body_cache.h"
@@ -21,20 +22,6 @@
 
 namespace strata {
 namespace {
-
-// The rotation taking unit direction a onto unit direction b by the shortest arc (no twist about either).
-glm::dquat shortest_arc(glm::dvec3 a, glm::dvec3 b) {
-  a = glm::normalize(a);
-  b = glm::normalize(b);
-  const double c = glm::dot(a, b);
-  if (c < -0.999999) {  // opposite: any axis normal to a
-    glm::dvec3 axis = glm::cross(a, glm::dvec3(1, 0, 0));
-    if (glm::dot(axis, axis) < 1e-12) axis = glm::cross(a, glm::dvec3(0, 1, 0));
-    return glm::angleAxis(3.141592653589793, glm::normalize(axis));
-  }
-  const glm::dvec3 axis = glm::cross(a, b);
-  return glm::normalize(glm::dquat(1.0 + c, axis.x, axis.y, axis.z));
-}
 
 // One joint's part of the fit: x -> target_center + R (x - source_center), then a stretch by `stretch` along
 // `axis` (the skeleton's segment to the joint's one child) of the part of x beyond the joint.
@@ -346,25 +333,17 @@ MakeHumanSource shipped_makehuman_source() {
 const BodyLevels& makehuman_default_body() {
   static const BodyLevels body = [] {
     // Bump when the derivation's output changes, so stale cache files are ignored.
-    constexpr std::uint32_t kDerivationVersion = 1;
+    constexpr std::uint32_t kDerivationVersion = 2;
     const Skeleton skeleton = load_default_humanoid().skeleton;
     const BodyOptions options;
-    const MakeHumanSource source = shipped_makehuman_source();
-    const auto directory = body_cache_directory();
     // The key covers the skeleton, the options, the version and the shipped source's bytes (a re-packed source
     // invalidates the cache even if nobody bumps the version).
     FnvHasher hasher;
     hasher.value(body_cache_key(skeleton, options, 0x4d480000u + kDerivationVersion));
     const std::string_view bytes = *embedded::find("data/makehuman_body.bin");
     hasher.bytes(bytes.data(), bytes.size());
-    const std::uint64_t key = hasher.h;
-    char name[48];
-    std::snprintf(name, sizeof name, "makehuman_body_%016llx.bin", static_cast<unsigned long long>(key));
-    if (directory)
-      if (std::optional<BodyLevels> cached = load_body_cache(*directory / name, key)) return std::move(*cached);
-    BodyLevels derived = derive_makehuman_body(source, skeleton, options);
-    if (directory) save_body_cache(*directory / name, key, derived);
-    return derived;
+    return cached_body_levels("makehuman_body", hasher.h,
+                              [&] { return derive_makehuman_body(shipped_makehuman_source(), skeleton, options); });
   }();
   return body;
 }
