@@ -573,7 +573,7 @@ TEST_F(RenderTest, RayTracedBodiesShadowTheGroundUnderThem) {
 
 // Impostors are refused before any work; a walker with a non-finite vertex is left out of the frame while the
 // other is traced; the same frame gives the same bytes on one thread and on two, and again on a second call
-// (the scene then refits instead of building).
+// (the scene then refits instead of building), and after a walker left the batch and came back.
 TEST_F(RenderTest, RayTracerRefusesImpostorsSkipsNonFiniteWalkersAndIsDeterministic) {
   renderer_->options().backend = RenderBackend::RayTraced;
   renderer_->options().draw_skeleton = false;
@@ -611,6 +611,16 @@ TEST_F(RenderTest, RayTracerRefusesImpostorsSkipsNonFiniteWalkersAndIsDeterminis
   EXPECT_EQ(pixel_at(holed, static_cast<int>(box1.x), static_cast<int>(box1.y)), sky);
   boxes.soa[1][boxes.per_walker + 3] = 0.3f;
   EXPECT_NE(pixel_at(traced(boxes), static_cast<int>(box1.x), static_cast<int>(box1.y)), sky) << "back next frame";
+  // A walker leaving the batch (culled, arrived) and coming back: the scene keeps up without a rebuild.
+  BodyDrawInput one = boxes.input();
+  one.walker_count = 1;
+  renderer_->render(SkeletonDrawInput{}, view, projection, &one);
+  std::vector<std::uint8_t> alone;
+  renderer_->read_rgba(alone);
+  EXPECT_NE(pixel_at(alone, static_cast<int>(box0.x), static_cast<int>(box0.y)), sky);
+  EXPECT_EQ(pixel_at(alone, static_cast<int>(box1.x), static_cast<int>(box1.y)), sky);
+  EXPECT_EQ(renderer_->triangles_drawn(), boxes.triangles.size() / 3);
+  EXPECT_EQ(traced(boxes), first) << "both again, as at first";
 }
 
 TEST_F(RenderTest, PassesAreTimedWhenAProfilerIsSet) {
