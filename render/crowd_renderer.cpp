@@ -83,6 +83,16 @@ struct CrowdRenderer::Impl {
   Profiler* profiler = nullptr;
   std::size_t triangles_drawn = 0;
   std::vector<glm::vec3> ground_points;  // scratch
+
+  // What the ground fits its extent to: the drawn joints and the impostors' feet together (only frames with
+  // impostors pay for the copy).
+  std::span<const glm::vec3> ground_fit_points(const SkeletonDrawInput& input) {
+    std::span<const glm::vec3> points = drawn_joint_positions(input);
+    if (input.ground_points.empty()) return points;
+    ground_points.assign(points.begin(), points.end());
+    ground_points.insert(ground_points.end(), input.ground_points.begin(), input.ground_points.end());
+    return ground_points;
+  }
   std::vector<glm::vec3> casters;        // scratch
 };
 
@@ -124,13 +134,7 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
     // The ray tracer checks its own inputs first; it draws bodies, props and ground, never skeletons.
     if (!r.tracer) r.tracer.emplace();
     r.tracer->set_props(r.props_cpu_key, r.props_cpu);
-    std::span<const glm::vec3> points = drawn_joint_positions(input);
-    if (!input.ground_points.empty()) {
-      r.ground_points.assign(points.begin(), points.end());
-      r.ground_points.insert(r.ground_points.end(), input.ground_points.begin(), input.ground_points.end());
-      points = r.ground_points;
-    }
-    r.tracer->render(bodies, points, view, projection, r.options, r.target.width(), r.target.height(), r.traced,
+    r.tracer->render(bodies, r.ground_fit_points(input), view, projection, r.options, r.target.width(), r.target.height(), r.traced,
                      r.profiler);
     r.triangles_drawn = r.tracer->triangles_traced();
     r.last_traced = true;
@@ -182,14 +186,7 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
   timer.start("ground");
   r.target.begin_frame(o.clear_color);
   if (o.draw_ground) {
-    std::span<const glm::vec3> points = drawn_joint_positions(input);
-    if (!input.ground_points.empty()) {
-      // Joints and the impostors' feet together; only frames with impostors pay for the copy.
-      r.ground_points.assign(points.begin(), points.end());
-      r.ground_points.insert(r.ground_points.end(), input.ground_points.begin(), input.ground_points.end());
-      points = r.ground_points;
-    }
-    r.ground.draw(points, view, projection, o.ground_color, o.clear_color, high ? &shaded : nullptr);
+    r.ground.draw(r.ground_fit_points(input), view, projection, o.ground_color, o.clear_color, high ? &shaded : nullptr);
   }
   r.props.draw(view, projection, high ? &shaded : nullptr);
   timer.start("skeletons");

@@ -93,8 +93,7 @@ struct RayTracer::Impl {
   RTCScene scene = nullptr;
   struct Batch {
     std::vector<std::uint32_t> triangles;  // the level's triangles, copied (the scene refers to them)
-    const std::uint32_t* topology = nullptr;
-    std::size_t walkers = 0, stride = 0, vertex_count = 0;
+    std::size_t stride = 0, vertex_count = 0;  // the walkers are geometry.size()
     std::vector<float> vertices;           // walkers * stride interleaved, plus one float of padding for SSE loads
     std::vector<unsigned> geometry;        // per walker
     std::vector<std::uint8_t> enabled;     // per walker: off for a frame with a non-finite vertex
@@ -205,7 +204,7 @@ void RayTracer::render(const BodySource& bodies, std::span<const glm::vec3> grou
   for (std::size_t k = 0; same && k < batches.size(); ++k) {
     const BodyDrawInput& b = batches[k].input;
     const Impl::Batch& s = r.batches[k];
-    same = s.topology == b.triangles.data() && s.triangles.size() == b.triangles.size() && s.stride == b.stride &&
+    same = s.triangles.size() == b.triangles.size() && s.stride == b.stride &&
            s.vertex_count == b.vertex_count && std::equal(s.triangles.begin(), s.triangles.end(), b.triangles.begin()) &&
            3 * b.walker_count * b.stride + 1 <= s.vertices.capacity();
   }
@@ -220,7 +219,6 @@ void RayTracer::render(const BodySource& bodies, std::span<const glm::vec3> grou
         s.enabled.pop_back();
       }
       for (std::size_t w = s.geometry.size(); w < walkers; ++w) add_walker(k, w);
-      s.walkers = walkers;
     }
   } else {
     r.release_scene();
@@ -233,8 +231,6 @@ void RayTracer::render(const BodySource& bodies, std::span<const glm::vec3> grou
       const BodyDrawInput& b = batches[k].input;
       Impl::Batch& s = r.batches[k];
       s.triangles.assign(b.triangles.begin(), b.triangles.end());
-      s.topology = b.triangles.data();
-      s.walkers = b.walker_count;
       s.stride = b.stride;
       s.vertex_count = b.vertex_count;
       // Room for a quarter more walkers, so a crowd that grows a little keeps its scene.

@@ -620,15 +620,7 @@ RawMesh extract(const Grid& g) {
 }
 
 Mesh to_mesh(const BodyModel& m, SimplifiedSurface s, const std::string& name) {
-  Mesh mesh;
-  mesh.name = name;
-  mesh.positions = std::move(s.positions);
-  mesh.triangles = std::move(s.triangles);
-  mesh.part_names = paper_part_names();
-  mesh.part.resize(mesh.positions.size());
-  for (std::size_t v = 0; v < mesh.positions.size(); ++v) mesh.part[v] = part_at(m, mesh.positions[v]);
-  compute_normals(mesh);
-  return mesh;
+  return body_level_mesh(std::move(s), name, [&](std::size_t, const glm::vec3& p) { return part_at(m, p); });
 }
 
 }  // namespace

@@ -296,15 +296,9 @@ BodyLevels derive_makehuman_body(const MakeHumanSource& source, const Skeleton& 
   // part was the first version: the thigh under a hanging thumb took the thumb's part, was bound to the wrist and
   // tore over the walk.
   auto to_mesh = [&](SimplifiedSurface s, const std::vector<std::uint32_t>& origin, const std::string& name) {
-    Mesh mesh;
-    mesh.name = name;
-    mesh.positions = std::move(s.positions);
-    mesh.triangles = std::move(s.triangles);
-    mesh.part_names = paper_part_names();
-    mesh.part.resize(mesh.positions.size());
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v) mesh.part[v] = source.part[origin[s.source_vertex[v]]];
-    compute_normals(mesh);
-    return mesh;
+    const std::vector<std::uint32_t> from = std::move(s.source_vertex);  // body_level_mesh needs only the rest
+    return body_level_mesh(std::move(s), name,
+                           [&](std::size_t v, const glm::vec3&) { return source.part[origin[from[v]]]; });
   };
   BodyLevels out;
   SimplifiedSurface prev{refined.positions, refined.triangles, {}};

@@ -240,4 +240,17 @@ SimplifiedSurface simplify_surface(const std::vector<glm::vec3>& positions, cons
   return s;
 }
 
+Mesh body_level_mesh(SimplifiedSurface surface, std::string name,
+                     const std::function<std::uint16_t(std::size_t, const glm::vec3&)>& part_of) {
+  Mesh mesh;
+  mesh.name = std::move(name);
+  mesh.positions = std::move(surface.positions);
+  mesh.triangles = std::move(surface.triangles);
+  mesh.part_names = paper_part_names();
+  mesh.part.resize(mesh.positions.size());
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) mesh.part[v] = part_of(v, mesh.positions[v]);
+  compute_normals(mesh);
+  return mesh;
+}
+
 }  // namespace strata

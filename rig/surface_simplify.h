@@ -3,9 +3,13 @@
 // the route every generated body (rig/body_generator.h, rig/makehuman_body.h) takes from its fine surface to the
 // paper's resolution levels and the subdivision cage.
 #include <cstdint>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
+
+#include "components/mesh.h"
 
 namespace strata {
 
@@ -29,6 +33,11 @@ inline constexpr double kSkinnedMinQuality = 0.1;
 // std::logic_error if the output is not one.
 SimplifiedSurface simplify_surface(const std::vector<glm::vec3>& positions, const std::vector<std::uint32_t>& triangles,
                                    std::uint32_t target_vertices, double min_quality);
+
+// A body level from a simplified surface: the paper's part names (components/mesh.h), each vertex's part from
+// part_of(v, position), area-weighted normals. What both shipped bodies make of each level and cage.
+Mesh body_level_mesh(SimplifiedSurface surface, std::string name,
+                     const std::function<std::uint16_t(std::size_t, const glm::vec3&)>& part_of);
 
 // Every directed edge used once and its reverse once, no degenerate triangle, every vertex's fan one cycle.
 bool is_closed_manifold(const std::vector<std::uint32_t>& triangles, std::size_t vertex_count);
