@@ -10,12 +10,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
+#include <memory>
 
 #include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
 #include "render/scene_draw.h"
+#include "apps/crowd_distributed.h"
 #include "apps/crowd_outputs.h"
 #include "io/image_writer.h"
 #include "profiling/profiler.h"
@@ -59,6 +62,8 @@ struct CrowdOptions {
   bool mp4 = false;                // --mp4: ask for the video (a note, not an error, when ffmpeg is absent)
   bool no_mp4 = false;             // --no-mp4; neither flag: a video whenever ffmpeg is on PATH
   std::size_t table1_frames = 5;   // frames timed at each body level not drawn, for summary.json's table1
+  double rebalance_seconds = 2.0;  // under mpirun: simulated seconds between recutting the ranks' slabs
+  double mpi_timeout_seconds = 600.0;  // under mpirun: a rank without progress this long stops the job
 };
 
 // summary.json: written at the start (the directory's manifest while the run goes on, "running": true, so a
@@ -73,70 +78,101 @@ void write_summary(const std::filesystem::path& dir, nlohmann::json summary, con
 int run_crowd(const CrowdOptions& o) {
   namespace fs = std::filesystem;
   const fs::path out(o.out);
+  // Under mpirun one crowd runs over every process (apps/crowd_distributed.h); joined first, so that a refusal
+  // below is agreed by every rank and printed once.
+  std::unique_ptr<CrowdDistribution> dist;
+  if (CrowdDistribution::launched()) {
+    try {
+      dist = std::make_unique<CrowdDistribution>(o.rebalance_seconds, o.mpi_timeout_seconds);
+    } catch (const std::exception& e) {
+      print_error("crowd", error_text(e));
+      return kExitFailure;
+    }
+  }
+  const bool root = !dist || dist->root();
   // Everything that can be refused is refused before any work: the output directory, the memory the crowd
-  // needs, the inputs, then (once a context exists) the image size.
-  if (!check_outputs("crowd", {{"--out", out, true}})) return kExitFailure;
-  if (const std::string why = check_renderer_level(o.renderer, o.scene.level, o.skeleton_overlay); !why.empty()) {
-    print_error("crowd", why);
-    return kExitUsage;
-  }
-  if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
-    print_error("crowd", why);
-    return kExitFailure;
-  }
+  // needs, the inputs, then (once a context exists) the image size. Each check runs only while none failed; the
+  // first refusal is kept with its exit code and, under mpirun, agreed between ranks before anyone stops.
+  std::string refusal;
+  int refusal_code = kExitOk;
+  const auto refuse = [&](int code, std::string why) {
+    refusal_code = code;
+    refusal = std::move(why);
+  };
+  const auto stop_if_refused = [&]() {
+    if (dist) {
+      if (!dist->report_failures("crowd", refusal)) return false;
+      // Every rank leaves with a failure; a rank whose own checks passed takes the usage code only if it was one.
+      return true;
+    }
+    if (refusal.empty()) return false;
+    print_error("crowd", refusal);
+    return true;
+  };
+  if (const std::string why = check_output_dir("--out", out); root && !why.empty()) refuse(kExitFailure, why);
+  if (refusal.empty())
+    if (const std::string why = check_renderer_level(o.renderer, o.scene.level, o.skeleton_overlay); !why.empty())
+      refuse(kExitUsage, why);
+  if (refusal.empty() && dist && o.renderer != RenderBackend::Gl)
+    refuse(kExitUsage, "--renderer embree: a distributed run composites depth, which only the GL renderer keeps");
+  if (refusal.empty())
+    if (const std::string why = check_crowd_memory(o.scene); !why.empty()) refuse(kExitFailure, why);
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   std::unique_ptr<Crowd> built;
   std::unique_ptr<GlContext> context;
-  try {
-    check_scene_inputs(o.scene);
-    built = build_scene(o.scene);
-    context = create_headless_gl_context();
-  } catch (const std::exception& e) {
-    print_error("crowd", error_text(e));
-    return kExitFailure;
+  if (refusal.empty()) {
+    try {
+      check_scene_inputs(o.scene);
+      built = build_scene(o.scene);
+      context = create_headless_gl_context();
+    } catch (const std::exception& e) {
+      refuse(kExitFailure, error_text(e));
+    }
   }
-  if (const std::string why = check_render_size(context->limits(), o.width, o.height); !why.empty()) {
-    print_error("crowd", why);
-    return kExitFailure;
-  }
+  if (refusal.empty())
+    if (const std::string why = check_render_size(context->limits(), o.width, o.height); !why.empty())
+      refuse(kExitFailure, why);
   // The render targets are made now, before the output directory: a driver may refuse a size inside the limits
   // it reports (llvmpipe caps one resource's bytes, which 4x MSAA at 12000x12000 exceeds), and that must fail
   // here with the flags named, not at the first frame with a bare GL status.
   std::unique_ptr<CrowdRenderer> renderer_owner;
-  try {
-    renderer_owner = std::make_unique<CrowdRenderer>(o.width, o.height);
-  } catch (const std::exception& e) {
-    print_error("crowd", render_target_error(o.width, o.height, context->limits(), e));
-    return kExitFailure;
+  if (refusal.empty()) {
+    try {
+      renderer_owner = std::make_unique<CrowdRenderer>(o.width, o.height);
+    } catch (const std::exception& e) {
+      refuse(kExitFailure, render_target_error(o.width, o.height, context->limits(), e));
+    }
   }
+  // The output directory is rank 0's alone (the other ranks may be other machines).
+  if (refusal.empty() && root) {
+    const OutputClaim claim = claim_crowd_output_dir(out);
+    if (!claim.refused.empty()) refuse(kExitUsage, claim.refused);
+    std::error_code ec;
+    if (refusal.empty()) fs::create_directories(out, ec);
+    if (refusal.empty() && ec) refuse(kExitFailure, "--out: cannot create " + out.string() + ": " + ec.message());
+  }
+  if (stop_if_refused()) return refusal_code != kExitOk ? refusal_code : kExitFailure;
   CrowdRenderer& renderer = *renderer_owner;
   renderer.options().quality = o.quality;
   renderer.options().backend = o.renderer;
-  const OutputClaim claim = claim_crowd_output_dir(out);
-  if (!claim.refused.empty()) {
-    print_error("crowd", claim.refused);
-    return kExitUsage;
-  }
   Crowd& scene = *built;
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) {
-    print_error("crowd", "--out: cannot create " + out.string() + ": " + ec.message());
-    return kExitFailure;
-  }
 
   nlohmann::json summary;
   summary["command"] = "crowd";
   summary["running"] = true;
   summary["inputs"] = scene_inputs_json(o.scene);
   std::vector<std::string> files;  // written so far, relative to --out
+  if (dist) summary["mpi_ranks"] = dist->ranks();
   try {
-    write_summary(out, summary, files);
+    if (root) write_summary(out, summary, files);
     const bool bodies = !scene.skin.level.is_none();
     RenderScratch scratch;
     RenderFrameOptions draw;
     draw.skeleton_overlay = o.skeleton_overlay;
+    if (dist) draw.share_bounds = [&](glm::vec3& lo, glm::vec3& hi) { dist->share_bounds(lo, hi); };
+    // Under mpirun every rank's profiler starts at a common barrier, so the merged trace's clocks line up.
+    if (dist) dist->all_ok(true);
     Profiler profiler(120, true);
     // The render passes under the "render" scope, each finished before its scope closes (render/crowd_renderer.h).
     renderer.set_profiler(&profiler);
@@ -144,12 +180,12 @@ int run_crowd(const CrowdOptions& o) {
     camera.yaw = o.camera_yaw;
     camera.pitch = o.camera_pitch;
     std::vector<std::uint8_t> pixels;
-    ProgressLine bar("frames", o.progress);
+    ProgressLine bar("frames", o.progress && root);
     const float dt = 1.0f / o.fps;
     const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
     std::size_t written = 0;
     std::unique_ptr<Mp4Writer> mp4;
-    if (!o.no_mp4) {
+    if (!o.no_mp4 && root) {
       const fs::path ffmpeg = find_on_path("ffmpeg");
       if (ffmpeg.empty())
         std::cerr << "strata crowd: ffmpeg is not on PATH; no crowd.mp4 (install ffmpeg for a video)\n";
@@ -159,46 +195,77 @@ int run_crowd(const CrowdOptions& o) {
     double simulate_render_s = 0.0;  // simulate + render + read-back, without writing outputs: Table 1's fps
     const auto wall_start = std::chrono::steady_clock::now();
 
+    // The camera frames the whole crowd: under mpirun every rank's bounds of its own walkers, shared.
+    const auto frame_camera = [&]() {
+      glm::vec3 lo, hi;
+      bool any = crowd_frame_bounds(scene, scratch, lo, hi);
+      if (dist) {
+        if (!any) lo = glm::vec3(std::numeric_limits<float>::max()), hi = glm::vec3(std::numeric_limits<float>::lowest());
+        dist->share_bounds(lo, hi);
+        any = lo.x <= hi.x;
+      }
+      if (any) camera.frame_box_tight(lo, hi, aspect);
+      return any;
+    };
+    std::size_t steps_taken = 0;
+    const auto step_crowd = [&](Profiler& p) {
+      if (dist) dist->assign_walkers(scene, static_cast<double>(steps_taken) * dt);
+      step(scene, dt, p);
+      ++steps_taken;
+    };
+    // SIGINT/SIGTERM: stop between frames. Under mpirun every rank stops at the same frame (they agree on it).
+    const auto stop_now = [&]() { return dist ? !dist->all_ok(!interrupted()) : interrupted(); };
     // A walking crowd under --level auto starts as impostors (scene/body_settings.h spawn_slot): framed from their
     // feet before the first step, so that step already gives the near walkers their meshes.
-    if (scene.table(DetailSlot::Impostor).size() > 0 && frame_crowd(scene, camera, aspect, scratch))
+    if (scene.table(DetailSlot::Impostor).size() > 0 && frame_camera())
       set_crowd_camera(scene, camera, aspect, o.height);
     // --skip: the crowd runs that long unseen before the first drawn frame (a scenario's crowd in mid-crossing).
     // Without a camera yet, walkers keep the tables they were spawned in (scene/step.h), so a crowd spawned as
     // impostors only advances its clocks and agents: cheap, and the first drawn frame restarts the near walks.
     const auto skipped = static_cast<std::size_t>(o.skip_seconds * o.fps + 0.5);
-    for (std::size_t f = 0; f < skipped && !interrupted(); ++f) step(scene, dt, profiler);
+    for (std::size_t f = 0; f < skipped && !stop_now(); ++f) step_crowd(profiler);
     std::size_t frames_done = 0;
     for (std::size_t f = 0; f < o.frames; ++f) {
       // SIGINT/SIGTERM: stop between frames, then write what the frames done show.
-      if (interrupted()) break;
+      if (stop_now()) break;
       profiler.begin_frame();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
         const auto frame_start = std::chrono::steady_clock::now();
-        step(scene, dt, profiler);
+        step_crowd(profiler);
         {
           STRATA_PROFILE_SCOPE(profiler, "render");
           if (f == 0) {
             // Frame the crowd once from its first pose; a camera that re-fits every frame would pump. Bodies
             // reach past the joints (the skull above skullbase, the soles below the ankles).
-            frame_crowd(scene, camera, aspect, scratch);
+            frame_camera();
           } else if (o.follow) {
             // Joints gathered here only when followed: render_frame gathers its own for the skeleton pass.
             gather_crowd_joints(scene, scratch.joints);
             glm::vec3 lo, hi;
-            if (joint_bounds(scratch.joints, lo, hi)) camera.target = 0.5f * (lo + hi);
+            bool any = joint_bounds(scratch.joints, lo, hi);
+            if (dist) {
+              if (!any) lo = glm::vec3(std::numeric_limits<float>::max()), hi = glm::vec3(std::numeric_limits<float>::lowest());
+              dist->share_bounds(lo, hi);
+              any = lo.x <= hi.x;
+            }
+            if (any) camera.target = 0.5f * (lo + hi);
           }
           // From the next frame on, walkers outside this camera are culled and --level auto picks by size.
           render_frame(scene, renderer, camera, aspect, o.height, scratch, draw);
           renderer.read_rgba(pixels);
+        }
+        if (dist) {
+          dist->frame_done(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_start).count());
+          STRATA_PROFILE_SCOPE(profiler, "composite");
+          dist->composite(renderer, pixels, o.width, o.height);
         }
         simulate_render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - frame_start).count();
         if (mp4) {
           STRATA_PROFILE_SCOPE(profiler, "write_mp4");
           mp4->write(pixels);
         }
-        if (!o.no_png && f % o.png_every == 0) {
+        if (root && !o.no_png && f % o.png_every == 0) {
           STRATA_PROFILE_SCOPE(profiler, "write_png");
           char name[32];
           std::snprintf(name, sizeof name, "frame_%04zu.png", f);
@@ -214,7 +281,7 @@ int run_crowd(const CrowdOptions& o) {
                  elapsed > 0 ? static_cast<double>(f + 1) / elapsed : 0.0);
     }
     bar.finish();
-    const bool stopped = interrupted();
+    const bool stopped = dist ? frames_done < o.frames : interrupted();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     std::size_t mp4_frames = 0;
     if (mp4) {
@@ -226,9 +293,11 @@ int run_crowd(const CrowdOptions& o) {
       else mp4.reset();
     }
 
-    profiler.write_chrome_trace(out / "profile.json");
+    // Under mpirun: one trace with a process per rank; the CSV and the systems table are rank 0's own.
+    if (dist) dist->write_merged_trace(profiler, out / "profile.json");
+    else profiler.write_chrome_trace(out / "profile.json");
     files.push_back("profile.json");
-    profiler.write_csv(out / "profile.csv");
+    if (root) profiler.write_csv(out / "profile.csv");
     files.push_back("profile.csv");
 
     summary.erase("running");
@@ -272,7 +341,8 @@ int run_crowd(const CrowdOptions& o) {
     summary["gl_version"] = context->version();
     summary["wall_s"] = wall;
     summary["fps"] = wall > 0 ? static_cast<double>(frames_done) / wall : 0.0;
-    summary["state_hash"] = state_hash(scene);
+    summary["state_hash"] = dist ? dist->state_hash(scene) : state_hash(scene);
+    if (dist) summary["mpi"] = dist->summary(frames_done);
     nlohmann::json systems = nlohmann::json::array();
     for (const SystemStats& s : profiler.stats())
       systems.push_back({{"name", s.name}, {"samples", s.samples}, {"min_ms", s.min_ms}, {"mean_ms", s.mean_ms},
@@ -283,8 +353,9 @@ int run_crowd(const CrowdOptions& o) {
     // timing the other levels walks the crowd on. Not after an interruption: the user asked to stop.
     // A profiler of its own, so the extra frames stay out of the timings reported above.
     Profiler table1_profiler(1, false);
+    // Not under mpirun: Table 1 times one process drawing the whole crowd.
     const std::vector<Table1Row> table1 =
-        frames_done == 0 ? std::vector<Table1Row>{}
+        frames_done == 0 || dist ? std::vector<Table1Row>{}
                          : measure_table1(scene, static_cast<double>(frames_done) / simulate_render_s, frames_done,
                                           stopped ? 0 : o.table1_frames, [&] {
                                             step(scene, dt, table1_profiler);
@@ -292,6 +363,7 @@ int run_crowd(const CrowdOptions& o) {
                                             renderer.read_rgba(pixels);
                                           });
     summary["table1"] = table1_json(table1);
+    if (!root) return stopped ? interrupted_exit_code() : kExitOk;
     write_summary(out, summary, files);
 
     std::cout << "strata crowd: " << scene.walker_count() << " walkers x " << frames_done << " frames, "
@@ -319,6 +391,11 @@ int run_crowd(const CrowdOptions& o) {
       return interrupted_exit_code();
     }
   } catch (const std::exception& e) {
+    if (dist) {
+      // One rank's failure mid-run: the others would wait for it in the next collective, so every rank stops.
+      print_error("crowd", "rank " + std::to_string(dist->rank()) + ": " + error_text(e) + "; stopping every rank");
+      dist->abort(kExitFailure);
+    }
     print_error("crowd", error_text(e));
     return kExitFailure;
   }
@@ -356,6 +433,14 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("!--no-progress", o->progress, "Hide the progress bar");
   cmd->add_flag("--mp4", o->mp4, "Write crowd.mp4 through ffmpeg (the default whenever ffmpeg is on PATH)");
   cmd->add_flag("--no-mp4", o->no_mp4, "Write no video even when ffmpeg is on PATH")->excludes("--mp4");
+  cmd->add_option("--rebalance-seconds", o->rebalance_seconds,
+                  "Under mpirun: simulated seconds between recutting the ranks' slabs by walker density")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 3600.0));
+  cmd->add_option("--mpi-timeout", o->mpi_timeout_seconds,
+                  "Under mpirun: seconds a rank may go without progress before the job is stopped (0: never)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 86400.0));
   cmd->add_option("--table1-frames", o->table1_frames,
                   "Frames timed at each body level not drawn, for the fps column of summary.json's table1 (0: none)")
       ->capture_default_str()->check(whole_in(0, 100'000, true));

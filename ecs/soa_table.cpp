@@ -105,6 +105,36 @@ void SoaTable::check(std::size_t field, std::uint32_t component, ScalarType type
     throw std::invalid_argument("SoaTable '" + name_ + "': field '" + fields_[field].name + "' accessed as wrong type");
 }
 
+std::size_t SoaTable::block_scalars() const {
+  std::size_t n = 0;
+  for (const FieldDesc& f : fields_) n += std::size_t(f.width) * rows_per_entity_;
+  return n;
+}
+
+void SoaTable::read_block(std::uint32_t block, std::span<std::uint32_t> out) const {
+  if (block >= size() || out.size() != block_scalars())
+    throw std::out_of_range("SoaTable '" + name_ + "': read_block outside the table or of the wrong size");
+  std::size_t k = 0;
+  const std::size_t row0 = std::size_t(block) * rows_per_entity_;
+  for (std::size_t f = 0; f < fields_.size(); ++f)
+    for (std::uint32_t c = 0; c < fields_[f].width; ++c) {
+      const std::uint32_t* column = raw(f, c) + row0;
+      for (std::uint32_t r = 0; r < rows_per_entity_; ++r) out[k++] = column[r];
+    }
+}
+
+void SoaTable::write_block(std::uint32_t block, std::span<const std::uint32_t> in) {
+  if (block >= size() || in.size() != block_scalars())
+    throw std::out_of_range("SoaTable '" + name_ + "': write_block outside the table or of the wrong size");
+  std::size_t k = 0;
+  const std::size_t row0 = std::size_t(block) * rows_per_entity_;
+  for (std::size_t f = 0; f < fields_.size(); ++f)
+    for (std::uint32_t c = 0; c < fields_[f].width; ++c) {
+      std::uint32_t* column = raw(f, c) + row0;
+      for (std::uint32_t r = 0; r < rows_per_entity_; ++r) column[r] = in[k++];
+    }
+}
+
 std::uint32_t* SoaTable::raw(std::size_t field, std::uint32_t component) {
   return storage_[field].data() + std::size_t(component) * stride_;
 }

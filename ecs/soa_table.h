@@ -57,6 +57,12 @@ class SoaTable {
   std::span<const std::int32_t> i32(std::size_t field, std::uint32_t component = 0) const;
   std::span<std::uint32_t> u32(std::size_t field, std::uint32_t component = 0);
   std::span<const std::uint32_t> u32(std::size_t field, std::uint32_t component = 0) const;
+  // One block's every scalar (every field, component and row of the block, fields in order, then components, then
+  // rows), as raw 32-bit words: how a walker's whole state travels to another process (dist/migration.h). A
+  // table of the same fields reads it back with write_block. Throws std::out_of_range for a bad block or size.
+  std::size_t block_scalars() const;
+  void read_block(std::uint32_t block, std::span<std::uint32_t> out) const;
+  void write_block(std::uint32_t block, std::span<const std::uint32_t> in);
   // Base of a whole float field: component c starts at base + c * stride(). For kernels that walk components.
   float* f32_base(std::size_t field);
   const float* f32_base(std::size_t field) const;

@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <variant>
+#include <stdexcept>
 #include <vector>
 
 #include <glm/common.hpp>
@@ -162,6 +163,11 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
     shaded.sun = &sun;
     shaded.eye = glm::vec3(glm::inverse(view)[3]);
     std::span<const glm::vec3> casters = drawn_joint_positions(input);
+    if (!input.shadow_fit_points.empty()) {
+      r.casters.assign(casters.begin(), casters.end());
+      r.casters.insert(r.casters.end(), input.shadow_fit_points.begin(), input.shadow_fit_points.end());
+      casters = r.casters;
+    }
     if (casters.empty()) {
       // Bodies without skeletons (a caller drawing meshes only): the corners of their vertices' bounds.
       glm::vec3 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
@@ -215,6 +221,10 @@ void CrowdRenderer::finish() const { glFinish(); }
 void CrowdRenderer::read_rgba(std::vector<std::uint8_t>& out) const {
   if (impl_->last_traced) out = impl_->traced;
   else impl_->target.read_rgba(out);
+}
+void CrowdRenderer::read_depth(std::vector<float>& out) const {
+  if (impl_->last_traced) throw std::logic_error("crowd renderer: a ray-traced frame has no depth buffer");
+  impl_->target.read_depth(out);
 }
 unsigned CrowdRenderer::output_framebuffer() const { return impl_->target.output_framebuffer(); }
 void CrowdRenderer::blit_to_default_framebuffer(int width, int height) const {

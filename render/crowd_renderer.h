@@ -78,6 +78,9 @@ class CrowdRenderer {
   void finish() const;
   // RGBA8 pixels, rows top to bottom (image order), width*height*4 bytes.
   void read_rgba(std::vector<std::uint8_t>& out) const;
+  // The depth of each pixel of the last GL frame (render/render_target.h read_depth), rows as read_rgba's. Throws
+  // std::logic_error after a ray-traced frame, which keeps no depth.
+  void read_depth(std::vector<float>& out) const;
   // The single-sample framebuffer render() resolves into and read_rgba() reads: an overlay (the viewer's panel)
   // drawn into it after render() shows up in read_rgba().
   unsigned output_framebuffer() const;

@@ -21,6 +21,7 @@ GlObject::GlObject(GlKind kind) : kind_(kind) {
     case GlKind::kTexture2D: glCreateTextures(GL_TEXTURE_2D, 1, &name_); break;
     case GlKind::kTexture2DArray: glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &name_); break;
     case GlKind::kTextureBuffer: glCreateTextures(GL_TEXTURE_BUFFER, 1, &name_); break;
+    case GlKind::kTexture2DMultisample: glCreateTextures(GL_TEXTURE_2D_MULTISAMPLE, 1, &name_); break;
   }
 }
 
@@ -43,7 +44,8 @@ void GlObject::reset() {
     case GlKind::kProgram: glDeleteProgram(name_); break;
     case GlKind::kTexture2D:
     case GlKind::kTexture2DArray:
-    case GlKind::kTextureBuffer: glDeleteTextures(1, &name_); break;
+    case GlKind::kTextureBuffer:
+    case GlKind::kTexture2DMultisample: glDeleteTextures(1, &name_); break;
   }
   name_ = 0;
 }

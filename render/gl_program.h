@@ -10,7 +10,7 @@
 namespace strata {
 
 // What a GlObject holds, which decides how it is created and deleted.
-enum class GlKind { kBuffer, kVertexArray, kFramebuffer, kRenderbuffer, kProgram, kTexture2D, kTexture2DArray, kTextureBuffer };
+enum class GlKind { kBuffer, kVertexArray, kFramebuffer, kRenderbuffer, kProgram, kTexture2D, kTexture2DArray, kTextureBuffer, kTexture2DMultisample };
 
 // Owns one GL object name and deletes it with the matching glDelete*. Move-only. The GL context that created it
 // must be current when it is destroyed (as for every pass). An owning handle rather than create/destroy pairs

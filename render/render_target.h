@@ -32,19 +32,26 @@ class RenderTarget {
   unsigned output_framebuffer() const { return buffers_.resolve_fbo.id(); }
   // RGBA8 pixels, rows top to bottom (image order), width*height*4 bytes.
   void read_rgba(std::vector<std::uint8_t>& out) const;
+  // The depth of each pixel (window depth, 0 near to 1 far; the cleared background is 1), rows top to bottom as
+  // read_rgba's, width*height floats: the nearest of the pixel's samples (render/shaders/depth_nearest.frag), so
+  // a pixel a surface only partly covers has that surface's depth. What sort-last compositing compares
+  // (dist/composite.h): the process that drew an edge wins its antialiased pixel. Rejected: a depth blit, which
+  // gives one sample of the GL's choosing, often the ground's beside an edge, and lost those pixels.
+  void read_depth(std::vector<float>& out) const;
   // Copies the resolved image to framebuffer 0 (a window), scaled to the given size.
   void blit_to_default_framebuffer(int width, int height) const;
 
  private:
   struct Buffers {
     GlObject msaa_fbo, msaa_color, msaa_depth;
-    GlObject resolve_fbo, resolve_color;
+    GlObject resolve_fbo, resolve_color, resolve_depth;
   };
   static Buffers create(int width, int height, int samples);
 
   int width_ = 0, height_ = 0;
   int samples_ = 0;
   Buffers buffers_;
+  mutable GlObject depth_program_, depth_vao_;  // read_depth's pass, made at its first call
 };
 
 }  // namespace strata

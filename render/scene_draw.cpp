@@ -4,6 +4,8 @@
 #include "render/scene_draw.h"
 
 #include <cmath>
+#include <limits>
+#include <span>
 
 #include <glm/common.hpp>
 
@@ -183,15 +185,25 @@ void set_crowd_camera(Crowd& crowd, const OrbitCamera& camera, float aspect, int
   crowd.lod.view = lod_view(camera, aspect, viewport_height);
 }
 
+bool crowd_frame_bounds(const Crowd& crowd, RenderScratch& scratch, glm::vec3& lo, glm::vec3& hi) {
+  if (!crowd.skin.level.is_none() && body_bounds(crowd, lo, hi)) return true;
+  gather_crowd_joints(crowd, scratch.joints);
+  return joint_bounds(scratch.joints, lo, hi);
+}
+
 bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderScratch& scratch) {
   glm::vec3 lo, hi;
-  bool any = !crowd.skin.level.is_none() && body_bounds(crowd, lo, hi);
-  if (!any) {
-    gather_crowd_joints(crowd, scratch.joints);
-    any = joint_bounds(scratch.joints, lo, hi);
-  }
+  const bool any = crowd_frame_bounds(crowd, scratch, lo, hi);
   if (any) camera.frame_box_tight(lo, hi, aspect);
   return any;
+}
+
+bool finite_point_bounds(std::span<const glm::vec3> points, glm::vec3& lo, glm::vec3& hi) {
+  lo = glm::vec3(std::numeric_limits<float>::max());
+  hi = glm::vec3(std::numeric_limits<float>::lowest());
+  for (const glm::vec3& p : points)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  return lo.x <= hi.x;
 }
 
 std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
@@ -219,11 +231,33 @@ std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamer
     renderer.set_props(0, {});
   }
   SkeletonDrawInput skeletons{&crowd.rig().skeleton, scratch.joints, with_joints};
-  if (crowd.table(DetailSlot::Impostor).size() > 0) {
+  const bool impostors = crowd.table(DetailSlot::Impostor).size() > 0;
+  if (impostors) {
     // The first frame with impostors bakes (or loads) the rig's atlas: seconds once, then cached on disk.
     ensure_impostor_atlas(crowd);
     impostor_feet(crowd, scratch.impostor_feet);
     skeletons.ground_points = scratch.impostor_feet;
+  }
+  if (options.share_bounds) {
+    // The ground and the shadow frustum are fitted to boxes of their points (render/ground_pass.h ground_extent,
+    // render/shadow_pass.h): this process's points plus the two corners of every process's box give every
+    // process that box.
+    const std::size_t joints = with_joints * crowd.rig().skeleton.joint_count();
+    glm::vec3 lo, hi, feet_lo, feet_hi;
+    finite_point_bounds(std::span<const glm::vec3>(scratch.joints.data(), std::min(joints, scratch.joints.size())), lo, hi);
+    glm::vec3 joints_lo = lo, joints_hi = hi;
+    options.share_bounds(joints_lo, joints_hi);
+    scratch.shared_joints.clear();
+    if (joints_lo.x <= joints_hi.x) scratch.shared_joints = {joints_lo, joints_hi};
+    skeletons.shadow_fit_points = scratch.shared_joints;
+    if (impostors && finite_point_bounds(scratch.impostor_feet, feet_lo, feet_hi))
+      lo = glm::min(lo, feet_lo), hi = glm::max(hi, feet_hi);
+    options.share_bounds(lo, hi);
+    scratch.shared_ground.clear();
+    if (lo.x <= hi.x) scratch.shared_ground = {lo, hi};
+    skeletons.ground_points = scratch.shared_ground;
+  }
+  if (impostors) {
     scratch.batches.assign(bodies.begin(), bodies.end());
     scratch.batches.emplace_back(impostor_batch(crowd, &scratch.impostor_phase, &scratch.impostor_keys));
     renderer.render(skeletons, camera.view(), camera.projection(aspect), BodyBatches(scratch.batches));

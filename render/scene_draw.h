@@ -51,6 +51,8 @@ void set_crowd_camera(Crowd& crowd, const OrbitCamera& camera, float aspect, int
 // without a body), tightly (OrbitCamera::frame_box_tight). False, camera untouched, when there is nothing to frame.
 struct RenderScratch;
 bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderScratch& scratch);
+// The box frame_crowd frames: false when there is nothing to frame.
+bool crowd_frame_bounds(const Crowd& crowd, RenderScratch& scratch, glm::vec3& lo, glm::vec3& hi);
 
 // Per-frame scratch a command keeps between frames, so render_frame allocates nothing in steady state.
 struct RenderScratch {
@@ -62,6 +64,8 @@ struct RenderScratch {
   std::array<std::uint64_t, kDetailSlots> materials_of{};  // a key of what `materials` was computed for
   std::vector<glm::vec3> joints;
   std::vector<glm::vec3> impostor_feet;
+  std::vector<glm::vec3> shared_ground;  // the corners RenderFrameOptions::share_bounds returned: ground
+  std::vector<glm::vec3> shared_joints;  // and joints
   std::vector<float> impostor_phase;
   std::vector<std::uint32_t> impostor_keys;
   std::vector<BodyBatch> batches;
@@ -71,11 +75,18 @@ struct RenderFrameOptions {
   bool skeleton_overlay = false;  // bones and joints over the bodies (always drawn when the level is none)
   // Called with the body inputs before they are drawn (the binding editor tints weights this way).
   std::function<void(std::vector<BodyDrawInput>&)> recolour;
+  // A crowd spread over processes (dist/): called with the corners of a box of this process's (lo > hi when it
+  // has nothing) and returning every process's; twice a frame: the joints' box, which the sun's shadow frustum is
+  // fitted to, then the box of the joints and impostors' feet, which the ground is fitted to. So each process
+  // draws the same ground and shadow map as one process drawing the whole crowd.
+  std::function<void(glm::vec3& lo, glm::vec3& hi)> share_bounds;
 };
 
 // Draws the crowd's last step from `camera` into `renderer`'s target (aspect = width / height of the target,
 // viewport_height its pixel height), then set_crowd_camera(). Returns the body triangles drawn.
 std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
                          int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options = {});
+// Bounds of the joints of a render_frame's skeleton input (every finite point); false when there are none.
+bool finite_point_bounds(std::span<const glm::vec3> points, glm::vec3& lo, glm::vec3& hi);
 
 }  // namespace strata

@@ -16,6 +16,10 @@ struct SkeletonDrawInput {
   std::size_t walker_count = 0;
   // Further points the ground must reach under: walkers drawn without joints (impostors), at their feet.
   std::span<const glm::vec3> ground_points = {};
+  // Further points the sun's shadow frustum must hold (RenderQuality::High fits it to the box of the joints and
+  // these): a process drawing part of a crowd gives the corners of the whole crowd's joints (dist/), so that its
+  // shadow map has the same texels as one process drawing everything.
+  std::span<const glm::vec3> shadow_fit_points = {};
 };
 
 // Throws std::invalid_argument when `input` has walkers but no skeleton, a skeleton whose parents disagree with

@@ -46,6 +46,7 @@
 #include "systems/locomotion.h"
 #include "systems/lod.h"
 #include "systems/mocap_drive.h"
+#include "systems/ownership.h"
 #include "systems/skin.h"
 #include "systems/skin_kernel.h"
 
@@ -125,6 +126,9 @@ struct CrowdLod {
   };
   std::vector<Candidate> candidates;
   std::vector<Entity> restarted;  // scratch: walkers that left a light table this frame (their walk restarts)
+  // One crowd spread over several processes (dist/): the slab of ground whose walkers this process animates,
+  // skins and draws; the others are kept culled (systems/ownership.h). None: every walker is this process's.
+  std::optional<OwnershipRegion> ownership;
 };
 
 struct Crowd {

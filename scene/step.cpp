@@ -17,6 +17,7 @@
 #include "systems/job.h"
 #include "systems/subdiv.h"
 #include "systems/lod.h"
+#include "systems/ownership.h"
 
 namespace strata {
 namespace {
@@ -99,6 +100,21 @@ void apply_mesh_budget(Crowd& crowd) {
   lod.over_budget = candidates.size() - budget;
 }
 
+// A crowd spread over processes (CrowdLod::ownership): walkers outside this process's slab are culled here, after
+// the camera's decision and before the mesh budget, so the budget ranks only the walkers this process draws (it
+// bounds one machine's frame, so each process keeps its own).
+void apply_ownership(const Crowd& crowd, const SoaTable& t, std::vector<std::uint8_t>& decided) {
+  if (!crowd.lod.ownership || t.size() == 0) return;
+  OwnershipJob job;
+  job.region = &*crowd.lod.ownership;
+  job.culled_slot = static_cast<std::uint8_t>(DetailSlot::Culled);
+  job.walkers = t.size();
+  job.stride = t.stride();
+  job.placement = t.f32_base(kWalkerPlacement);
+  job.decided = std::span<std::uint8_t>(decided.data(), t.size());
+  if (!job.run()) throw std::logic_error("step: the ownership job rejected table " + t.name());
+}
+
 // The level-of-detail stage, first in the frame: the table each walker is simulated and skinned from this frame,
 // and the moves that put it there. It reads the placement the last frame left (a walker moves ~5 cm a frame, far
 // less than its bounding sphere), so the systems after it know which walkers need their whole pipeline.
@@ -124,6 +140,7 @@ void lod_stage(Crowd& crowd, FrameProfile& profile) {
       const std::uint8_t to = level.is_automatic() && impostors ? static_cast<std::uint8_t>(s)
                                                                 : static_cast<std::uint8_t>(fixed_slot);
       std::fill(decided.begin(), decided.begin() + static_cast<std::ptrdiff_t>(t.size()), to);
+      apply_ownership(crowd, t, decided);
       continue;
     }
     // The table a walker is in is its previous decision: hysteresis needs nothing else. Culled (and never seen)
@@ -150,6 +167,7 @@ void lod_stage(Crowd& crowd, FrameProfile& profile) {
     job.decided = std::span<std::uint8_t>(decided.data(), t.size());
     job.distance = std::span<float>(lod.distance[s].data(), t.size());
     if (!job.run()) throw std::logic_error("step: the level-of-detail job rejected table " + t.name());
+    apply_ownership(crowd, t, decided);
   }
   if (decide && level.is_automatic() && impostors) apply_mesh_budget(crowd);
   else lod.over_budget = 0;

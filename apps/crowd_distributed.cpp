@@ -1,0 +1,331 @@
+#include "apps/crowd_distributed.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include "dist/partition.h"
+#include "profiling/profiler.h"
+#include "render/crowd_renderer.h"
+#include "scene/crowd.h"
+#include "scene/state_hash.h"
+
+#if defined(STRATA_HAVE_MPI)
+#include "dist/mpi_world.h"
+#endif
+
+namespace strata {
+
+#if defined(STRATA_HAVE_MPI)
+
+namespace {
+
+double now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double mean_of(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+}
+
+double p95_of(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(v.size())))];
+}
+
+template <class T>
+void append_bytes(std::vector<std::uint8_t>& out, const T& value) {
+  const auto* p = reinterpret_cast<const std::uint8_t*>(&value);
+  out.insert(out.end(), p, p + sizeof(T));
+}
+
+}  // namespace
+
+struct CrowdDistribution::Impl {
+  MpiWorld world;
+  double rebalance_s = 2.0, timeout_s = 600.0;
+  CrowdPartition partition;
+  double next_cut_s = 0.0;
+  std::size_t recuts = 0;
+  std::vector<Entity> walkers;       // every walker, creation order (the same on every rank)
+  std::vector<float> xs, zs;         // their placements at the last assign_walkers
+  std::vector<std::int32_t> owner;   // their owners then (-1: nobody, a placement not finite)
+  std::size_t owned = 0;
+  std::vector<double> compute_ms, composite_ms, depth_read_ms, wait_ms;
+  std::vector<float> depth;
+  std::vector<std::uint8_t> composited;
+  std::size_t frames_composited = 0;
+  // The watchdog: a rank that has not beaten for timeout_s ends its process, and mpirun then ends the job.
+  std::atomic<double> last_beat{0.0};
+  std::atomic<bool> stopping{false};
+  std::thread watchdog;
+
+  Impl(double rebalance, double timeout) : rebalance_s(rebalance), timeout_s(timeout) {
+    last_beat = now_s();
+    if (timeout_s > 0)
+      watchdog = std::thread([this] {
+        while (!stopping.load()) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(200));
+          if (now_s() - last_beat.load() > timeout_s) {
+            std::fprintf(stderr, "strata crowd: rank %d: no progress for %.0f s (--mpi-timeout); stopping every rank\n",
+                         world.rank(), timeout_s);
+            std::fflush(stderr);
+            std::_Exit(1);
+          }
+        }
+      });
+  }
+  ~Impl() {
+    stopping = true;
+    if (watchdog.joinable()) watchdog.join();
+  }
+  void beat() { last_beat = now_s(); }
+};
+
+bool CrowdDistribution::launched() { return MpiWorld::launched(); }
+
+CrowdDistribution::CrowdDistribution(double rebalance_seconds, double timeout_seconds)
+    : impl_(std::make_unique<Impl>(rebalance_seconds, timeout_seconds)) {}
+CrowdDistribution::~CrowdDistribution() = default;
+
+int CrowdDistribution::rank() const { return impl_->world.rank(); }
+int CrowdDistribution::ranks() const { return impl_->world.size(); }
+bool CrowdDistribution::all_ok(bool ok) { return impl_->world.all_ok(ok); }
+
+bool CrowdDistribution::report_failures(const std::string& command, const std::string& my_error) {
+  const bool failed_here = !my_error.empty();
+  if (impl_->world.all_ok(!failed_here)) return false;
+  // Did rank 0 fail? Then its line is the one: the same input fails the same way on every rank.
+  const std::vector<double> failed = impl_->world.all_gather(failed_here ? 1.0 : 0.0);
+  if (failed_here && (root() || failed[0] == 0.0)) {
+    if (root()) std::fprintf(stderr, "strata %s: %s\n", command.c_str(), my_error.c_str());
+    else std::fprintf(stderr, "strata %s: rank %d: %s\n", command.c_str(), rank(), my_error.c_str());
+    std::fflush(stderr);
+  }
+  return true;
+}
+
+void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
+  Impl& d = *impl_;
+  d.beat();
+  d.walkers = crowd.world.entities();
+  const std::size_t n = d.walkers.size();
+  d.xs.resize(n), d.zs.resize(n), d.owner.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const EntityLocation at = crowd.world.location(d.walkers[i]);
+    const SoaTable& t = crowd.world.table(at.table);
+    d.xs[i] = t.f32(kWalkerPlacement, 0)[at.block];
+    d.zs[i] = t.f32(kWalkerPlacement, 2)[at.block];
+  }
+  if (time_s + 1e-9 >= d.next_cut_s || d.partition.ranks() != ranks()) {
+    d.partition = partition_by_density(d.xs, d.zs, ranks());
+    d.next_cut_s = time_s + d.rebalance_s;
+    ++d.recuts;
+  }
+  crowd.lod.ownership = d.partition.region(rank());
+  d.owned = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    d.owner[i] = d.partition.owner(d.xs[i], d.zs[i]);
+    if (d.owner[i] == rank()) ++d.owned;
+  }
+}
+
+void CrowdDistribution::share_bounds(glm::vec3& lo, glm::vec3& hi) {
+  float l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+  impl_->world.min_max(l, h);
+  lo = glm::vec3(l[0], l[1], l[2]);
+  hi = glm::vec3(h[0], h[1], h[2]);
+}
+
+void CrowdDistribution::composite(const CrowdRenderer& renderer, std::vector<std::uint8_t>& pixels, int width,
+                                  int height) {
+  Impl& d = *impl_;
+  using clock = std::chrono::steady_clock;
+  const auto ms_since = [](clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(clock::now() - t).count();
+  };
+  auto t = clock::now();
+  renderer.read_depth(d.depth);
+  d.depth_read_ms.push_back(ms_since(t));
+  // The wait for the slowest rank is load imbalance, not compositing: timed apart at a barrier.
+  t = clock::now();
+  d.world.barrier();
+  d.wait_ms.push_back(ms_since(t));
+  t = clock::now();
+  d.world.composite(pixels, d.depth, width, height, d.composited);
+  if (root()) pixels.swap(d.composited);
+  d.composite_ms.push_back(ms_since(t));
+  ++d.frames_composited;
+  d.beat();
+}
+
+void CrowdDistribution::frame_done(double compute_ms) {
+  impl_->compute_ms.push_back(compute_ms);
+  impl_->beat();
+}
+
+std::uint64_t CrowdDistribution::state_hash(const Crowd& crowd) {
+  Impl& d = *impl_;
+  const std::vector<Entity> walkers = crowd.world.entities();
+  if (walkers.size() != d.walkers.size())
+    throw std::logic_error("CrowdDistribution::state_hash: the crowd changed since assign_walkers");
+  std::vector<std::uint8_t> mine;
+  for (std::size_t i = 0; i < walkers.size(); ++i)
+    if (d.owner[i] == rank()) {
+      append_bytes(mine, static_cast<std::uint64_t>(i));
+      append_bytes(mine, walker_state_digest(crowd, walkers[i]));
+    }
+  std::vector<std::size_t> sizes;
+  const std::vector<std::uint8_t> all = d.world.gather_to_root(mine, sizes);
+  if (!root()) return 0;
+  // A walker nobody owned (no finite placement) was kept by every rank as culled: rank 0's own digest stands.
+  std::vector<std::uint64_t> digests(walkers.size());
+  for (std::size_t i = 0; i < walkers.size(); ++i)
+    if (d.owner[i] < 0) digests[i] = walker_state_digest(crowd, walkers[i]);
+  for (std::size_t at = 0; at + 16 <= all.size(); at += 16) {
+    std::uint64_t index = 0, digest = 0;
+    std::memcpy(&index, &all[at], 8);
+    std::memcpy(&digest, &all[at + 8], 8);
+    if (index < digests.size()) digests[index] = digest;
+  }
+  return combine_walker_digests(digests);
+}
+
+void CrowdDistribution::write_merged_trace(const Profiler& profiler, const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  // Each rank's trace through a private temporary file (the profiler writes files), rewritten as its process.
+  const fs::path tmp = fs::temp_directory_path() /
+                       ("strata-trace-" + std::to_string(::getpid()) + "-" + std::to_string(rank()) + ".json");
+  profiler.write_chrome_trace(tmp);
+  nlohmann::json mine;
+  {
+    std::ifstream in(tmp);
+    mine = nlohmann::json::parse(in);
+  }
+  std::error_code ec;
+  fs::remove(tmp, ec);
+  const int pid = rank() + 1;
+  for (nlohmann::json& e : mine.at("traceEvents")) {
+    e["pid"] = pid;
+    if (e.value("name", "") == "process_name")
+      e["args"]["name"] = "strata rank " + std::to_string(rank()) + " on " + impl_->world.processor_name();
+  }
+  const std::string text = mine.at("traceEvents").dump();
+  std::vector<std::size_t> sizes;
+  const std::vector<std::uint8_t> all =
+      impl_->world.gather_to_root(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()), sizes);
+  if (!root()) return;
+  nlohmann::json merged;
+  merged["traceEvents"] = nlohmann::json::array();
+  std::size_t at = 0;
+  for (const std::size_t n : sizes) {
+    const nlohmann::json events = nlohmann::json::parse(all.begin() + static_cast<std::ptrdiff_t>(at),
+                                                        all.begin() + static_cast<std::ptrdiff_t>(at + n));
+    for (const nlohmann::json& e : events) merged["traceEvents"].push_back(e);
+    at += n;
+  }
+  merged["displayTimeUnit"] = "ms";
+  merged["otherData"] = mine.value("otherData", nlohmann::json::object());
+  merged["otherData"]["ranks"] = ranks();
+  merged["otherData"]["clock"] =
+      "steady_clock of each rank, microseconds since its profiler was created just after a common MPI barrier";
+  std::ofstream out(path);
+  out << merged.dump() << '\n';
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+nlohmann::json CrowdDistribution::summary(std::size_t frames) {
+  Impl& d = *impl_;
+  const std::vector<double> owned = d.world.all_gather(static_cast<double>(d.owned));
+  const std::vector<double> compute = d.world.all_gather(mean_of(d.compute_ms));
+  const std::vector<double> composite_mean = d.world.all_gather(mean_of(d.composite_ms));
+  const std::vector<double> composite_p95 = d.world.all_gather(p95_of(d.composite_ms));
+  const std::vector<double> depth_read = d.world.all_gather(mean_of(d.depth_read_ms));
+  const std::vector<double> wait = d.world.all_gather(mean_of(d.wait_ms));
+  const double per_frame = frames > 0 ? 1.0 / static_cast<double>(frames) : 0.0;
+  const std::vector<double> composite_bytes =
+      d.world.all_gather(static_cast<double>(d.world.composite_bytes_sent()) * per_frame);
+  const std::vector<double> bytes = d.world.all_gather(static_cast<double>(d.world.bytes_sent()) * per_frame);
+  const std::string host = d.world.processor_name();
+  std::vector<std::size_t> sizes;
+  const std::vector<std::uint8_t> hosts_bytes =
+      d.world.gather_to_root(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(host.data()), host.size()), sizes);
+  if (!root()) return nullptr;
+  nlohmann::json hosts = nlohmann::json::array();
+  std::size_t at = 0;
+  for (const std::size_t n : sizes) {
+    hosts.push_back(std::string(hosts_bytes.begin() + static_cast<std::ptrdiff_t>(at),
+                                hosts_bytes.begin() + static_cast<std::ptrdiff_t>(at + n)));
+    at += n;
+  }
+  const double mean_compute = mean_of(compute);
+  const double max_compute = compute.empty() ? 0.0 : *std::max_element(compute.begin(), compute.end());
+  nlohmann::json j;
+  j["ranks"] = ranks();
+  j["hosts"] = hosts;
+  j["compositor"] = "direct-send";
+  j["partition_axis"] = d.partition.axis == 0 ? "x" : "z";
+  j["partition_cuts_m"] = d.partition.cuts;
+  j["rebalance_s"] = d.rebalance_s;
+  j["repartitions"] = d.recuts;
+  j["walkers_per_rank"] = owned;
+  j["compute_ms_mean_per_rank"] = compute;
+  // The slowest rank's frame over the mean rank's: 1 is perfect balance.
+  j["load_imbalance"] = mean_compute > 0 ? max_compute / mean_compute : 1.0;
+  j["depth_read_ms_mean_per_rank"] = depth_read;
+  j["wait_ms_mean_per_rank"] = wait;
+  j["composite_ms_mean_per_rank"] = composite_mean;
+  j["composite_ms_p95_per_rank"] = composite_p95;
+  j["composite_bytes_per_frame_per_rank"] = composite_bytes;
+  j["bytes_sent_per_frame_per_rank"] = bytes;
+  j["simulation_bytes_per_frame"] = 0;
+  return j;
+}
+
+void CrowdDistribution::abort(int code) { impl_->world.abort(code); }
+
+#else  // built without MPI
+
+struct CrowdDistribution::Impl {};
+bool CrowdDistribution::launched() {
+  for (const char* var : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(var)) return true;
+  return false;
+}
+CrowdDistribution::CrowdDistribution(double, double) {
+  throw std::runtime_error(
+      "started by mpirun, but this strata was built without MPI (install libopenmpi-dev and rebuild)");
+}
+CrowdDistribution::~CrowdDistribution() = default;
+int CrowdDistribution::rank() const { return 0; }
+int CrowdDistribution::ranks() const { return 1; }
+bool CrowdDistribution::all_ok(bool ok) { return ok; }
+bool CrowdDistribution::report_failures(const std::string&, const std::string& e) { return !e.empty(); }
+void CrowdDistribution::assign_walkers(Crowd&, double) {}
+void CrowdDistribution::share_bounds(glm::vec3&, glm::vec3&) {}
+void CrowdDistribution::composite(const CrowdRenderer&, std::vector<std::uint8_t>&, int, int) {}
+void CrowdDistribution::frame_done(double) {}
+std::uint64_t CrowdDistribution::state_hash(const Crowd&) { return 0; }
+void CrowdDistribution::write_merged_trace(const Profiler&, const std::filesystem::path&) {}
+nlohmann::json CrowdDistribution::summary(std::size_t) { return nullptr; }
+void CrowdDistribution::abort(int code) { std::_Exit(code); }
+
+#endif
+
+}  // namespace strata

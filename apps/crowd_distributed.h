@@ -1,0 +1,76 @@
+#pragma once
+// What `strata crowd` does differently when started by mpirun (docs/scale-out.md): one crowd over K processes.
+//
+//   every rank   builds the same crowd from the same inputs and seed, and advances every walker's gait clock
+//                (a few ns a walker); owns the walkers in its slab of ground (dist/partition.h, recut by walker
+//                density every --rebalance-seconds), and only for those runs IK, FK, muscles, skinning and
+//                drawing (systems/ownership.h); renders them over the shared ground into colour + depth
+//   compositing  each frame's pieces folded by depth (dist/composite.h) onto rank 0 (dist/mpi_world.h)
+//   rank 0       writes the frames, the video, summary.json (with an "mpi" object: ranks, walkers per rank, load
+//                imbalance, bytes sent per frame, compositing time) and one Chrome trace with a process per rank
+//
+// Failures: inputs every rank reads are checked on every rank and reported once, by rank 0; an error on one rank
+// only is printed by that rank with its number, and every rank stops (MPI_Abort). A watchdog ends a rank that
+// makes no progress for --mpi-timeout seconds, which makes mpirun stop the others: no run hangs.
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <nlohmann/json_fwd.hpp>
+
+namespace strata {
+
+struct Crowd;
+class CrowdRenderer;
+class Profiler;
+
+class CrowdDistribution {
+ public:
+  // True when this process was started by mpirun / mpiexec.
+  static bool launched();
+  // Joins the job (MPI_Init). Throws std::runtime_error when this strata was built without MPI or MPI fails.
+  CrowdDistribution(double rebalance_seconds, double timeout_seconds);
+  ~CrowdDistribution();
+  CrowdDistribution(const CrowdDistribution&) = delete;
+  CrowdDistribution& operator=(const CrowdDistribution&) = delete;
+
+  int rank() const;
+  int ranks() const;
+  bool root() const { return rank() == 0; }
+  // True on every rank when `ok` is true on every rank.
+  bool all_ok(bool ok);
+  // Every rank's error line printed once: rank 0's when it has one, otherwise each failing rank's with its number.
+  // Returns true when some rank failed (then every rank must stop).
+  bool report_failures(const std::string& command, const std::string& my_error);
+
+  // Before each step: recuts the slabs when due (at `time_s` 0 and every rebalance period after), gives the crowd
+  // this rank's slab, and records every walker's owner for this frame.
+  void assign_walkers(Crowd& crowd, double time_s);
+  // Every rank's bounds: lo the minimum, hi the maximum.
+  void share_bounds(glm::vec3& lo, glm::vec3& hi);
+  // Reads the renderer's depth and composites every rank's frame; on rank 0 `pixels` becomes the whole frame.
+  void composite(const CrowdRenderer& renderer, std::vector<std::uint8_t>& pixels, int width, int height);
+  // After each frame: this rank's time for the frame without compositing (ms); feeds the watchdog.
+  void frame_done(double compute_ms);
+
+  // state_hash (scene/state_hash.h) of the whole crowd, on rank 0 (0 elsewhere): each walker's digest from the
+  // rank that owned it in the last step.
+  std::uint64_t state_hash(const Crowd& crowd);
+  // Rank 0 writes to `path` one Chrome trace of every rank's `profiler` (a process per rank, clocks started at a
+  // common barrier); the others send theirs.
+  void write_merged_trace(const Profiler& profiler, const std::filesystem::path& path);
+  // Rank 0: summary.json's "mpi" object (the others return null). Collective.
+  nlohmann::json summary(std::size_t frames);
+  // Ends every rank of the job now with exit status `code` (MPI_Abort).
+  [[noreturn]] void abort(int code);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace strata
