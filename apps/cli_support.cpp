@@ -159,7 +159,23 @@ std::string error_text(const std::exception& e) {
   return text;
 }
 
+namespace {
+int launcher_env(std::initializer_list<const char*> names, int absent) {
+  for (const char* name : names)
+    if (const char* v = std::getenv(name)) {
+      char* end = nullptr;
+      const long n = std::strtol(v, &end, 10);
+      if (end != v && n >= 0 && n < 1 << 24) return static_cast<int>(n);
+    }
+  return absent;
+}
+}  // namespace
+
+int launcher_rank() { return launcher_env({"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"}, -1); }
+int launcher_size() { return launcher_env({"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}, 0); }
+
 void print_error(std::string_view command, std::string_view message) {
+  if (launcher_rank() > 0) return;
   std::string line = "strata";
   if (!command.empty()) line.append(" ").append(command);
   line.append(": ").append(message);

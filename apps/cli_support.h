@@ -95,6 +95,11 @@ std::unique_ptr<CrowdRenderer> make_checked_renderer(GlContext& context, int wid
 std::string error_text(const std::exception& e);
 // One line to stderr: "strata <command>: <message>".
 void print_error(std::string_view command, std::string_view message);
+// Under mpirun every rank runs the same command line, and an error in it is every rank's: only rank 0 prints
+// (print_error stays silent on the others). launcher_rank()/launcher_size() read the launcher's environment
+// (OpenMPI's, or PMI's), without MPI: -1 and 0 outside mpirun.
+int launcher_rank();
+int launcher_size();
 
 // ---- Memory ----------------------------------------------------------------------------------------------------
 // Bytes this process may still allocate: the least of MemAvailable, the cgroup's memory.max minus its current

@@ -393,7 +393,9 @@ int run_crowd(const CrowdOptions& o) {
   } catch (const std::exception& e) {
     if (dist) {
       // One rank's failure mid-run: the others would wait for it in the next collective, so every rank stops.
-      print_error("crowd", "rank " + std::to_string(dist->rank()) + ": " + error_text(e) + "; stopping every rank");
+      // Printed by the failing rank itself (print_error speaks for rank 0 only).
+      std::cerr << "strata crowd: rank " << dist->rank() << ": " << error_text(e) << "; stopping every rank\n";
+      std::cerr.flush();
       dist->abort(kExitFailure);
     }
     print_error("crowd", error_text(e));

@@ -223,7 +223,7 @@ int run_view(const ViewOptions& o) {
         const DetailLevel level_before = scene.skin.level;
         session.advance(dt, profiler);
         STRATA_PROFILE_SCOPE(profiler, "render");
-        gather_crowd_joints(scene, joints);
+        gather_crowd_joints(scene, joints, /*include_culled=*/true);  // framing reaches walkers out of view
         if (!framed || panel.frame_camera_requested) {
           glm::vec3 lo, hi;
           if (joint_bounds(joints, lo, hi)) camera.frame_box(lo, hi, aspect);

@@ -17,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "dist/migration.h"
 #include "dist/partition.h"
 #include "profiling/profiler.h"
 #include "render/crowd_renderer.h"
@@ -67,6 +68,7 @@ struct CrowdDistribution::Impl {
   std::vector<float> xs, zs;         // their placements at the last assign_walkers
   std::vector<std::int32_t> owner;   // their owners then (-1: nobody, a placement not finite)
   std::size_t owned = 0;
+  std::size_t migrated_out = 0, migrated_in = 0, migration_bytes = 0;  // this rank's, over the run
   std::vector<double> compute_ms, composite_ms, depth_read_ms, wait_ms;
   std::vector<float> depth;
   std::vector<std::uint8_t> composited;
@@ -124,11 +126,14 @@ bool CrowdDistribution::report_failures(const std::string& command, const std::s
 void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
   Impl& d = *impl_;
   d.beat();
-  d.walkers = crowd.world.entities();
-  const std::size_t n = d.walkers.size();
-  d.xs.resize(n), d.zs.resize(n), d.owner.resize(n);
+  const std::vector<Entity> walkers = crowd.world.entities();
+  const std::size_t n = walkers.size();
+  // The last step's owners, if the crowd is the one they were given for.
+  const bool had_owners = walkers == d.walkers;
+  d.walkers = walkers;
+  d.xs.resize(n), d.zs.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const EntityLocation at = crowd.world.location(d.walkers[i]);
+    const EntityLocation at = crowd.world.location(walkers[i]);
     const SoaTable& t = crowd.world.table(at.table);
     d.xs[i] = t.f32(kWalkerPlacement, 0)[at.block];
     d.zs[i] = t.f32(kWalkerPlacement, 2)[at.block];
@@ -138,12 +143,27 @@ void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
     d.next_cut_s = time_s + d.rebalance_s;
     ++d.recuts;
   }
+  std::vector<std::int32_t> owner(n);
+  for (std::size_t i = 0; i < n; ++i) owner[i] = d.partition.owner(d.xs[i], d.zs[i]);
+  // Walkers this rank animated in the last step and another owns now travel there, row and all
+  // (dist/migration.h). A walker nobody owned (no finite placement) was culled everywhere: nothing to send.
+  if (had_owners && ranks() > 1) {
+    std::vector<std::vector<Entity>> leaving(static_cast<std::size_t>(ranks()));
+    for (std::size_t i = 0; i < n; ++i)
+      if (d.owner[i] == rank() && owner[i] >= 0 && owner[i] != rank())
+        leaving[static_cast<std::size_t>(owner[i])].push_back(walkers[i]);
+    std::vector<std::vector<std::uint8_t>> to_rank(static_cast<std::size_t>(ranks()));
+    for (std::size_t r = 0; r < to_rank.size(); ++r) {
+      pack_walkers(crowd, leaving[r], to_rank[r]);
+      d.migrated_out += leaving[r].size();
+      d.migration_bytes += to_rank[r].size();
+    }
+    d.migrated_in += unpack_walkers(crowd, d.world.exchange(to_rank));
+  }
+  d.owner = std::move(owner);
   crowd.lod.ownership = d.partition.region(rank());
   d.owned = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    d.owner[i] = d.partition.owner(d.xs[i], d.zs[i]);
-    if (d.owner[i] == rank()) ++d.owned;
-  }
+  for (std::size_t i = 0; i < n; ++i) d.owned += d.owner[i] == rank();
 }
 
 void CrowdDistribution::share_bounds(glm::vec3& lo, glm::vec3& hi) {
@@ -262,6 +282,8 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   const std::vector<double> composite_bytes =
       d.world.all_gather(static_cast<double>(d.world.composite_bytes_sent()) * per_frame);
   const std::vector<double> bytes = d.world.all_gather(static_cast<double>(d.world.bytes_sent()) * per_frame);
+  const std::vector<double> migration = d.world.all_gather(static_cast<double>(d.migration_bytes) * per_frame);
+  const std::vector<double> migrated = d.world.all_gather(static_cast<double>(d.migrated_out));
   const std::string host = d.world.processor_name();
   std::vector<std::size_t> sizes;
   const std::vector<std::uint8_t> hosts_bytes =
@@ -294,7 +316,9 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   j["composite_ms_p95_per_rank"] = composite_p95;
   j["composite_bytes_per_frame_per_rank"] = composite_bytes;
   j["bytes_sent_per_frame_per_rank"] = bytes;
-  j["simulation_bytes_per_frame"] = 0;
+  // Simulation traffic: the rows of walkers changing owner (every rank advances every gait clock itself).
+  j["migration_bytes_per_frame_per_rank"] = migration;
+  j["walkers_migrated_per_rank"] = migrated;
   return j;
 }
 

@@ -97,6 +97,30 @@ std::vector<std::uint8_t> MpiWorld::gather_to_root(std::span<const std::uint8_t>
 
 void MpiWorld::barrier() { check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
 
+std::vector<std::uint8_t> MpiWorld::exchange(const std::vector<std::vector<std::uint8_t>>& to_rank) {
+  const auto ranks = static_cast<std::size_t>(size_);
+  if (to_rank.size() != ranks) throw std::invalid_argument("MpiWorld::exchange: one buffer per rank expected");
+  std::vector<int> send_counts(ranks), send_at(ranks), recv_counts(ranks), recv_at(ranks);
+  std::vector<std::uint8_t> send;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    send_at[r] = as_count(send.size(), "exchange");
+    send_counts[r] = as_count(to_rank[r].size(), "exchange");
+    send.insert(send.end(), to_rank[r].begin(), to_rank[r].end());
+    if (r != static_cast<std::size_t>(rank_)) bytes_sent_ += to_rank[r].size() + sizeof(int);
+  }
+  check(MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Alltoall");
+  std::size_t total = 0;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    recv_at[r] = as_count(total, "exchange");
+    total += static_cast<std::size_t>(recv_counts[r]);
+  }
+  std::vector<std::uint8_t> received(total);
+  check(MPI_Alltoallv(send.data(), send_counts.data(), send_at.data(), MPI_BYTE, received.data(), recv_counts.data(),
+                      recv_at.data(), MPI_BYTE, MPI_COMM_WORLD),
+        "MPI_Alltoallv");
+  return received;
+}
+
 void MpiWorld::composite(std::span<const std::uint8_t> pixels, std::span<const float> depth, int width, int height,
                          std::vector<std::uint8_t>& out) {
   const auto pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);

@@ -44,6 +44,9 @@ class MpiWorld {
   // Rank 0 receives every rank's bytes concatenated in rank order and each rank's size; the others get empties.
   std::vector<std::uint8_t> gather_to_root(std::span<const std::uint8_t> bytes, std::vector<std::size_t>& sizes);
   void barrier();
+  // Sends to_rank[r] to rank r (every rank at once; empty buffers allowed) and returns what every rank sent this
+  // one, concatenated in rank order. to_rank must have one buffer per rank.
+  std::vector<std::uint8_t> exchange(const std::vector<std::vector<std::uint8_t>>& to_rank);
 
   // Composites every rank's `pixels` (RGBA8, rows top to bottom) and `depth` (one float a pixel, same rows) into
   // `out` on rank 0 (the others' `out` is left empty). Counts the bytes this rank sent.

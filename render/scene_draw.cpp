@@ -157,15 +157,20 @@ bool body_bounds(const Crowd& crowd, glm::vec3& lo, glm::vec3& hi) {
   return any;
 }
 
-std::size_t gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out) {
+std::size_t gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out, bool include_culled) {
   const std::size_t joints = crowd.joint_count();
-  out.resize((crowd.walker_count() - crowd.table(DetailSlot::Impostor).size()) * joints);
+  const std::size_t culled = include_culled ? 0 : crowd.table(DetailSlot::Culled).size();
+  out.resize((crowd.walker_count() - crowd.table(DetailSlot::Impostor).size() - culled) * joints);
   std::size_t at = 0;
   std::vector<glm::vec3> table_joints;
   for (std::size_t slot = 0; slot < kDetailSlots; ++slot) {
     // walker_lanes wants a mutable table; gathering only reads it.
     SoaTable& t = const_cast<SoaTable&>(crowd.world.table(crowd.tables[slot]));
-    if (t.size() == 0 || is_light_walker_table(t)) continue;
+    // Culled walkers are not drawn, and a walking crowd's culled walkers keep a stale pose (only their gait clock
+    // runs): their joints would fit the ground and the shadow frustum to where they were when last seen, and
+    // under mpirun to where they were when last this rank's (dist/).
+    if (t.size() == 0 || is_light_walker_table(t) || (!include_culled && slot == slot_index(DetailSlot::Culled)))
+      continue;
     gather_joint_positions(walker_lanes(t, crowd.joint_count()), table_joints);
     std::copy(table_joints.begin(), table_joints.end(), out.begin() + static_cast<std::ptrdiff_t>(at));
     at += table_joints.size();

@@ -38,9 +38,10 @@ ImpostorBatch impostor_batch(const Crowd& crowd, std::vector<float>* standing_ph
 // Bounds of every skinned vertex drawn and of every impostor (its feet up to its stature); false when none.
 bool body_bounds(const Crowd& crowd, glm::vec3& lo, glm::vec3& hi);
 // Every posed walker's world-space joint positions, walker-major, table by table (the skeleton pass's input and
-// what a camera frames when there are no bodies); impostors have no pose and none. Resizes `out` (grown, never
-// shrunk in capacity); returns the walkers gathered.
-std::size_t gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out);
+// what a camera frames when there are no bodies); impostors have no pose and culled walkers are not drawn: none,
+// unless `include_culled` (the viewer framing the whole crowd; a walking crowd's culled walkers hold the pose they
+// had when last seen). Resizes `out` (grown, never shrunk in capacity); returns the walkers gathered.
+std::size_t gather_crowd_joints(const Crowd& crowd, std::vector<glm::vec3>& out, bool include_culled = false);
 // The level-of-detail view (culling, projected sizes) of a camera rendering `viewport_height` pixels high.
 LodView lod_view(const OrbitCamera& camera, float aspect, int viewport_height);
 // Hands `camera` to the crowd's level-of-detail stage: from the next step() on, walkers it does not see are
