@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
@@ -284,6 +285,9 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   const std::vector<double> bytes = d.world.all_gather(static_cast<double>(d.world.bytes_sent()) * per_frame);
   const std::vector<double> migration = d.world.all_gather(static_cast<double>(d.migration_bytes) * per_frame);
   const std::vector<double> migrated = d.world.all_gather(static_cast<double>(d.migrated_out));
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);  // ru_maxrss: KiB on Linux
+  const std::vector<double> peak_rss = d.world.all_gather(static_cast<double>(usage.ru_maxrss) / 1024.0);
   const std::string host = d.world.processor_name();
   std::vector<std::size_t> sizes;
   const std::vector<std::uint8_t> hosts_bytes =
@@ -319,6 +323,7 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   // Simulation traffic: the rows of walkers changing owner (every rank advances every gait clock itself).
   j["migration_bytes_per_frame_per_rank"] = migration;
   j["walkers_migrated_per_rank"] = migrated;
+  j["peak_rss_mib_per_rank"] = peak_rss;
   return j;
 }
 

@@ -1,6 +1,7 @@
 #include "dist/composite.h"
 
 #include <algorithm>
+#include <cstring>
 #include <stdexcept>
 
 namespace strata {
@@ -16,8 +17,9 @@ void composite_nearest(std::span<std::uint8_t> acc_pixels, std::span<float> acc_
     const std::uint8_t* p = &pixels[4 * i];
     if (d < acc_depth[i]) {
       acc_depth[i] = d;
-      a[0] = p[0], a[1] = p[1], a[2] = p[2], a[3] = p[3];
-    } else if (d == acc_depth[i]) {
+      std::memcpy(a, p, 4);
+    } else if (d == acc_depth[i] && std::memcmp(a, p, 4) != 0) {
+      // A tie between different colours: the same ground or prop with another rank's shadow on it.
       for (int c = 0; c < 4; ++c) a[c] = std::min(a[c], p[c]);
     }
   }

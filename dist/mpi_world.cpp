@@ -1,5 +1,6 @@
 #include "dist/mpi_world.h"
 
+#include <chrono>
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
@@ -148,6 +149,11 @@ void MpiWorld::composite(std::span<const std::uint8_t> pixels, std::span<const f
     recv_d_at[r] = as_count(r * band, "composite");
     recv_px_at[r] = as_count(4 * r * band, "composite");
   }
+  using clock = std::chrono::steady_clock;
+  const auto ms_since = [](clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(clock::now() - t).count();
+  };
+  auto t = clock::now();
   check(MPI_Alltoallv(pixels.data(), send_px.data(), send_px_at.data(), MPI_BYTE, recv_pixels_.data(), recv_px.data(),
                       recv_px_at.data(), MPI_BYTE, MPI_COMM_WORLD),
         "MPI_Alltoallv");
@@ -157,6 +163,8 @@ void MpiWorld::composite(std::span<const std::uint8_t> pixels, std::span<const f
   std::size_t sent = 0;
   for (std::size_t r = 0; r < ranks; ++r)
     if (r != mine) sent += static_cast<std::size_t>(send_px[r]) + 4 * static_cast<std::size_t>(send_d[r]);
+  times_.exchange_ms = ms_since(t);
+  t = clock::now();
   // Fold the band: rank 0's piece first, then the others (the rules are order-free; a fixed order anyway).
   band_pixels_.assign(recv_pixels_.begin(), recv_pixels_.begin() + static_cast<std::ptrdiff_t>(4 * band));
   band_depth_.assign(recv_depth_.begin(), recv_depth_.begin() + static_cast<std::ptrdiff_t>(band));
@@ -164,12 +172,15 @@ void MpiWorld::composite(std::span<const std::uint8_t> pixels, std::span<const f
     composite_nearest(band_pixels_, band_depth_,
                       std::span<const std::uint8_t>(recv_pixels_.data() + 4 * r * band, 4 * band),
                       std::span<const float>(recv_depth_.data() + r * band, band));
+  times_.fold_ms = ms_since(t);
+  t = clock::now();
   // Rank 0 gathers the folded bands, in rank order = row order.
   out.clear();
   if (rank_ == 0) out.resize(4 * pixel_count);
   check(MPI_Gatherv(band_pixels_.data(), static_cast<int>(4 * band), MPI_BYTE, out.data(), send_px.data(),
                     send_px_at.data(), MPI_BYTE, 0, MPI_COMM_WORLD),
         "MPI_Gatherv");
+  times_.gather_ms = ms_since(t);
   if (rank_ != 0) sent += 4 * band;
   composite_bytes_ += sent;
   bytes_sent_ += sent;

@@ -53,6 +53,12 @@ class MpiWorld {
   void composite(std::span<const std::uint8_t> pixels, std::span<const float> depth, int width, int height,
                  std::vector<std::uint8_t>& out);
 
+  // The last composite()'s stages on this rank (ms): the exchange of bands, the fold of this rank's band, the
+  // gather onto rank 0.
+  struct CompositeTimes {
+    double exchange_ms = 0, fold_ms = 0, gather_ms = 0;
+  };
+  CompositeTimes last_composite_times() const { return times_; }
   // Bytes this rank has sent since construction (compositing, gathers, reductions), and those of compositing.
   std::size_t bytes_sent() const { return bytes_sent_; }
   std::size_t composite_bytes_sent() const { return composite_bytes_; }
@@ -63,6 +69,7 @@ class MpiWorld {
  private:
   int rank_ = 0, size_ = 1;
   std::size_t bytes_sent_ = 0, composite_bytes_ = 0;
+  CompositeTimes times_;
   // Compositing scratch, grown, never shrunk.
   std::vector<std::uint8_t> send_pixels_, recv_pixels_, band_pixels_;
   std::vector<float> send_depth_, recv_depth_, band_depth_;

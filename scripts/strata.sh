@@ -28,6 +28,7 @@ PACKAGES=(
   ffmpeg
   librecast-dev
   libembree-dev
+  libopenmpi-dev openmpi-bin
 )
 
 install_missing() {
