@@ -9,8 +9,10 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 
 #include "apps/cli_support.h"
+#include "apps/crowd_distributed.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
@@ -32,6 +34,8 @@ struct BenchOptions {
   int width = 1280, height = 720;
   RenderQuality quality = RenderQuality::Low;
   RenderBackend renderer = RenderBackend::Gl;
+  double rebalance_seconds = 2.0;      // under mpirun (apps/crowd_distributed.h)
+  double mpi_timeout_seconds = 600.0;
 };
 
 // The crowd render pass (skinned bodies streamed every frame, one multi-draw per level) against the fastest way
@@ -118,21 +122,47 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& cont
 }
 
 int run_bench(const BenchOptions& o) {
-  if (!check_outputs("bench", {{"--json", o.json}})) return kExitFailure;
-  if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {
-    print_error("bench", why);
-    return kExitFailure;
+  // Under mpirun the simulation is timed with the crowd spread over the ranks as `strata crowd` spreads it
+  // (apps/crowd_distributed.h): each rank steps the walkers of its slab; rank 0 reports every rank's times.
+  std::unique_ptr<CrowdDistribution> dist;
+  if (CrowdDistribution::launched()) {
+    try {
+      dist = std::make_unique<CrowdDistribution>("bench", o.rebalance_seconds, o.mpi_timeout_seconds);
+    } catch (const std::exception& e) {
+      print_error("bench", error_text(e));
+      return kExitFailure;
+    }
   }
-  if (const std::string why = o.render ? check_renderer_level(o.renderer, o.scene.level, false) : std::string();
-      !why.empty()) {
-    print_error("bench", why);
-    return kExitUsage;
-  }
+  const bool root = !dist || dist->root();
+  // The first refusal with its exit code; under mpirun agreed between the ranks before anyone stops.
+  std::string refusal;
+  int refusal_code = kExitOk;
+  const auto refuse_if = [&](int code, std::string why) {
+    if (refusal.empty() && !why.empty()) refusal = std::move(why), refusal_code = code;
+  };
+  if (root && !o.json.empty()) refuse_if(kExitFailure, check_output_file("--json", o.json));
+  refuse_if(kExitFailure, check_crowd_memory(o.scene));
+  if (o.render) refuse_if(kExitUsage, check_renderer_level(o.renderer, o.scene.level, false));
+  if (o.render && dist)
+    refuse_if(kExitUsage, "--render under mpirun: the render benchmark times one process's pass (strata crowd "
+                          "composites a distributed frame)");
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  std::unique_ptr<Crowd> built;
+  if (refusal.empty()) {
+    try {
+      check_scene_inputs(o.scene);
+      built = build_scene(o.scene);
+    } catch (const std::exception& e) {
+      refuse_if(kExitFailure, error_text(e));
+    }
+  }
+  if (dist ? dist->report_failures("bench", refusal) : !refusal.empty()) {
+    if (!dist) print_error("bench", refusal);
+    return refusal.empty() ? kExitFailure : refusal_code;
+  }
   try {
-    check_scene_inputs(o.scene);
-    std::unique_ptr<Crowd> scene = build_scene(o.scene);
+    std::unique_ptr<Crowd> scene = std::move(built);
     // --render: the context and render target first, so a size the driver refuses fails before the timed frames.
     std::unique_ptr<GlContext> context;
     std::unique_ptr<CrowdRenderer> renderer;
@@ -149,32 +179,50 @@ int run_bench(const BenchOptions& o) {
     // the crowd (as strata crowd's) is handed to the level-of-detail stage, so the timed frames are the frame every
     // command runs, culling and --level auto included.
     Profiler warmup(8, false);
+    std::size_t steps_taken = 0;
+    const auto step_crowd = [&](Profiler& p) {
+      if (dist) dist->assign_walkers(*scene, static_cast<double>(steps_taken) / o.fps);
+      step(*scene, 1.0f / o.fps, p);
+      ++steps_taken;
+    };
     {
       OrbitCamera camera;
       RenderScratch scratch;
       const float aspect = static_cast<float>(o.width) / static_cast<float>(o.height);
       // A walking crowd under --level auto starts as impostors: framed from their feet before the first step.
       const bool framed_first = scene->table(DetailSlot::Impostor).size() > 0;
-      if (framed_first && frame_crowd(*scene, camera, aspect, scratch))
-        set_crowd_camera(*scene, camera, aspect, o.height);
-      step(*scene, 1.0f / o.fps, warmup);
-      frame_crowd(*scene, camera, aspect, scratch);
+      // Under mpirun the camera frames the whole crowd: every rank's bounds, shared.
+      const auto frame_all = [&]() {
+        glm::vec3 lo, hi;
+        bool any = crowd_frame_bounds(*scene, scratch, lo, hi);
+        if (dist) any = dist->share_box(any, lo, hi);
+        if (any) camera.frame_box_tight(lo, hi, aspect);
+        return any;
+      };
+      if (framed_first && frame_all()) set_crowd_camera(*scene, camera, aspect, o.height);
+      step_crowd(warmup);
+      frame_all();
       set_crowd_camera(*scene, camera, aspect, o.height);
     }
-    for (int f = 1; f < 3; ++f) step(*scene, 1.0f / o.fps, warmup);
+    for (int f = 1; f < 3; ++f) step_crowd(warmup);
     Profiler profiler(o.frames, false);
     const auto start = std::chrono::steady_clock::now();
     std::size_t frames = 0;  // measured; fewer than --frames when SIGINT/SIGTERM stopped the run
-    for (std::size_t f = 0; f < o.frames && !interrupted(); ++f, ++frames) {
+    // SIGINT/SIGTERM: stop between frames; under mpirun every rank at the same frame.
+    const auto stop_now = [&]() { return dist ? !dist->all_ok(!interrupted()) : interrupted(); };
+    for (std::size_t f = 0; f < o.frames && !stop_now(); ++f, ++frames) {
       profiler.begin_frame();
+      const auto frame_start = std::chrono::steady_clock::now();
       {
         STRATA_PROFILE_SCOPE(profiler, "frame");
-        step(*scene, 1.0f / o.fps, profiler);
+        step_crowd(profiler);
       }
+      if (dist)
+        dist->frame_done(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_start).count());
       profiler.end_frame();
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const bool stopped = interrupted();
+    const bool stopped = dist ? frames < o.frames : interrupted();
     const double frame_ms = frames ? 1000.0 * seconds / static_cast<double>(frames) : 0.0;
     // Vertices per walker of the (finest) level drawn; under --level auto with no camera every walker is at 0.
     const std::vector<BodyDrawInput> draws = body_draw_inputs(*scene);
@@ -190,6 +238,10 @@ int run_bench(const BenchOptions& o) {
     j["vertices_per_walker"] = vertices;
     j["frame_ms"] = frame_ms;
     j["walkers_per_second"] = frame_ms > 0 ? static_cast<double>(scene->walker_count()) * 1000.0 / frame_ms : 0.0;
+    // Under mpirun: frame_ms and systems are rank 0's; every rank's in "mpi" (the crowd's frame is its slowest
+    // rank's: compute_ms_mean_per_rank).
+    if (dist) j["mpi"] = dist->summary(frames);
+    if (!root) return stopped ? interrupted_exit_code() : kExitOk;
     nlohmann::json systems = nlohmann::json::array();
     for (const SystemStats& s : profiler.stats())
       systems.push_back({{"name", s.name}, {"mean_ms", s.mean_ms}, {"p95_ms", s.p95_ms}, {"min_ms", s.min_ms},
@@ -216,6 +268,11 @@ int run_bench(const BenchOptions& o) {
       return interrupted_exit_code();
     }
   } catch (const std::exception& e) {
+    if (dist) {
+      std::cerr << "strata bench: rank " << dist->rank() << ": " << error_text(e) << "; stopping every rank\n";
+      std::cerr.flush();
+      dist->abort(kExitFailure);
+    }
     print_error("bench", error_text(e));
     return 1;
   }
@@ -236,6 +293,14 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                 "Also time the crowd render pass (headless EGL) against raw instanced drawing of the same triangles");
   add_quality_option(*cmd, o->quality);
   add_renderer_option(*cmd, o->renderer);
+  cmd->add_option("--rebalance-seconds", o->rebalance_seconds,
+                  "Under mpirun: simulated seconds between recutting the ranks' slabs by walker density")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 3600.0));
+  cmd->add_option("--mpi-timeout", o->mpi_timeout_seconds,
+                  "Under mpirun: seconds a rank may go without progress before the job is stopped (0: never)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 86400.0));
   cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->callback([o, &exit_code] { exit_code = run_bench(*o); });

@@ -10,7 +10,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <limits>
 #include <memory>
 
 #include "apps/cli_support.h"
@@ -83,7 +82,7 @@ int run_crowd(const CrowdOptions& o) {
   std::unique_ptr<CrowdDistribution> dist;
   if (CrowdDistribution::launched()) {
     try {
-      dist = std::make_unique<CrowdDistribution>(o.rebalance_seconds, o.mpi_timeout_seconds);
+      dist = std::make_unique<CrowdDistribution>("crowd", o.rebalance_seconds, o.mpi_timeout_seconds);
     } catch (const std::exception& e) {
       print_error("crowd", error_text(e));
       return kExitFailure;
@@ -99,15 +98,11 @@ int run_crowd(const CrowdOptions& o) {
     refusal_code = code;
     refusal = std::move(why);
   };
+  // Under mpirun every rank stops when any refused (a rank whose own checks passed leaves with 1).
   const auto stop_if_refused = [&]() {
-    if (dist) {
-      if (!dist->report_failures("crowd", refusal)) return false;
-      // Every rank leaves with a failure; a rank whose own checks passed takes the usage code only if it was one.
-      return true;
-    }
-    if (refusal.empty()) return false;
-    print_error("crowd", refusal);
-    return true;
+    if (dist) return dist->report_failures("crowd", refusal);
+    if (!refusal.empty()) print_error("crowd", refusal);
+    return !refusal.empty();
   };
   if (const std::string why = check_output_dir("--out", out); root && !why.empty()) refuse(kExitFailure, why);
   if (refusal.empty())
@@ -199,11 +194,7 @@ int run_crowd(const CrowdOptions& o) {
     const auto frame_camera = [&]() {
       glm::vec3 lo, hi;
       bool any = crowd_frame_bounds(scene, scratch, lo, hi);
-      if (dist) {
-        if (!any) lo = glm::vec3(std::numeric_limits<float>::max()), hi = glm::vec3(std::numeric_limits<float>::lowest());
-        dist->share_bounds(lo, hi);
-        any = lo.x <= hi.x;
-      }
+      if (dist) any = dist->share_box(any, lo, hi);
       if (any) camera.frame_box_tight(lo, hi, aspect);
       return any;
     };
@@ -244,11 +235,7 @@ int run_crowd(const CrowdOptions& o) {
             gather_crowd_joints(scene, scratch.joints);
             glm::vec3 lo, hi;
             bool any = joint_bounds(scratch.joints, lo, hi);
-            if (dist) {
-              if (!any) lo = glm::vec3(std::numeric_limits<float>::max()), hi = glm::vec3(std::numeric_limits<float>::lowest());
-              dist->share_bounds(lo, hi);
-              any = lo.x <= hi.x;
-            }
+            if (dist) any = dist->share_box(any, lo, hi);
             if (any) camera.target = 0.5f * (lo + hi);
           }
           // From the next frame on, walkers outside this camera are culled and --level auto picks by size.

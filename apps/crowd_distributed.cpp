@@ -61,6 +61,7 @@ void append_bytes(std::vector<std::uint8_t>& out, const T& value) {
 
 struct CrowdDistribution::Impl {
   MpiWorld world;
+  std::string command;  // for the watchdog's line
   double rebalance_s = 2.0, timeout_s = 600.0;
   CrowdPartition partition;
   double next_cut_s = 0.0;
@@ -69,25 +70,25 @@ struct CrowdDistribution::Impl {
   std::vector<float> xs, zs;         // their placements at the last assign_walkers
   std::vector<std::int32_t> owner;   // their owners then (-1: nobody, a placement not finite)
   std::size_t owned = 0;
-  std::size_t migrated_out = 0, migrated_in = 0, migration_bytes = 0;  // this rank's, over the run
+  std::size_t migrated_out = 0, migration_bytes = 0;  // this rank's, over the run
   std::vector<double> compute_ms, composite_ms, depth_read_ms, wait_ms;
   std::vector<float> depth;
   std::vector<std::uint8_t> composited;
-  std::size_t frames_composited = 0;
   // The watchdog: a rank that has not beaten for timeout_s ends its process, and mpirun then ends the job.
   std::atomic<double> last_beat{0.0};
   std::atomic<bool> stopping{false};
   std::thread watchdog;
 
-  Impl(double rebalance, double timeout) : rebalance_s(rebalance), timeout_s(timeout) {
+  Impl(std::string name, double rebalance, double timeout)
+      : command(std::move(name)), rebalance_s(rebalance), timeout_s(timeout) {
     last_beat = now_s();
     if (timeout_s > 0)
       watchdog = std::thread([this] {
         while (!stopping.load()) {
           std::this_thread::sleep_for(std::chrono::milliseconds(200));
           if (now_s() - last_beat.load() > timeout_s) {
-            std::fprintf(stderr, "strata crowd: rank %d: no progress for %.0f s (--mpi-timeout); stopping every rank\n",
-                         world.rank(), timeout_s);
+            std::fprintf(stderr, "strata %s: rank %d: no progress for %.0f s (--mpi-timeout); stopping every rank\n",
+                         command.c_str(), world.rank(), timeout_s);
             std::fflush(stderr);
             std::_Exit(1);
           }
@@ -103,8 +104,8 @@ struct CrowdDistribution::Impl {
 
 bool CrowdDistribution::launched() { return MpiWorld::launched(); }
 
-CrowdDistribution::CrowdDistribution(double rebalance_seconds, double timeout_seconds)
-    : impl_(std::make_unique<Impl>(rebalance_seconds, timeout_seconds)) {}
+CrowdDistribution::CrowdDistribution(const std::string& command, double rebalance_seconds, double timeout_seconds)
+    : impl_(std::make_unique<Impl>(command, rebalance_seconds, timeout_seconds)) {}
 CrowdDistribution::~CrowdDistribution() = default;
 
 int CrowdDistribution::rank() const { return impl_->world.rank(); }
@@ -159,7 +160,7 @@ void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
       d.migrated_out += leaving[r].size();
       d.migration_bytes += to_rank[r].size();
     }
-    d.migrated_in += unpack_walkers(crowd, d.world.exchange(to_rank));
+    unpack_walkers(crowd, d.world.exchange(to_rank));
   }
   d.owner = std::move(owner);
   crowd.lod.ownership = d.partition.region(rank());
@@ -172,6 +173,12 @@ void CrowdDistribution::share_bounds(glm::vec3& lo, glm::vec3& hi) {
   impl_->world.min_max(l, h);
   lo = glm::vec3(l[0], l[1], l[2]);
   hi = glm::vec3(h[0], h[1], h[2]);
+}
+
+bool CrowdDistribution::share_box(bool any, glm::vec3& lo, glm::vec3& hi) {
+  if (!any) lo = glm::vec3(std::numeric_limits<float>::max()), hi = glm::vec3(std::numeric_limits<float>::lowest());
+  share_bounds(lo, hi);
+  return lo.x <= hi.x;
 }
 
 void CrowdDistribution::composite(const CrowdRenderer& renderer, std::vector<std::uint8_t>& pixels, int width,
@@ -192,7 +199,6 @@ void CrowdDistribution::composite(const CrowdRenderer& renderer, std::vector<std
   d.world.composite(pixels, d.depth, width, height, d.composited);
   if (root()) pixels.swap(d.composited);
   d.composite_ms.push_back(ms_since(t));
-  ++d.frames_composited;
   d.beat();
 }
 
@@ -337,7 +343,7 @@ bool CrowdDistribution::launched() {
     if (std::getenv(var)) return true;
   return false;
 }
-CrowdDistribution::CrowdDistribution(double, double) {
+CrowdDistribution::CrowdDistribution(const std::string&, double, double) {
   throw std::runtime_error(
       "started by mpirun, but this strata was built without MPI (install libopenmpi-dev and rebuild)");
 }
@@ -348,6 +354,7 @@ bool CrowdDistribution::all_ok(bool ok) { return ok; }
 bool CrowdDistribution::report_failures(const std::string&, const std::string& e) { return !e.empty(); }
 void CrowdDistribution::assign_walkers(Crowd&, double) {}
 void CrowdDistribution::share_bounds(glm::vec3&, glm::vec3&) {}
+bool CrowdDistribution::share_box(bool any, glm::vec3&, glm::vec3&) { return any; }
 void CrowdDistribution::composite(const CrowdRenderer&, std::vector<std::uint8_t>&, int, int) {}
 void CrowdDistribution::frame_done(double) {}
 std::uint64_t CrowdDistribution::state_hash(const Crowd&) { return 0; }

@@ -1,5 +1,6 @@
 #pragma once
-// What `strata crowd` does differently when started by mpirun (docs/scale-out.md): one crowd over K processes.
+// What `strata crowd` (and `strata bench`, for the simulation) does differently when started by mpirun
+// (docs/scale-out.md): one crowd over K processes.
 //
 //   every rank   builds the same crowd from the same inputs and seed, and advances every walker's gait clock
 //                (a few ns a walker); owns the walkers in its slab of ground (dist/partition.h, recut by walker
@@ -32,8 +33,9 @@ class CrowdDistribution {
  public:
   // True when this process was started by mpirun / mpiexec.
   static bool launched();
-  // Joins the job (MPI_Init). Throws std::runtime_error when this strata was built without MPI or MPI fails.
-  CrowdDistribution(double rebalance_seconds, double timeout_seconds);
+  // Joins the job (MPI_Init) for `command` (its name in the watchdog's line). Throws std::runtime_error when this
+  // strata was built without MPI or MPI fails.
+  CrowdDistribution(const std::string& command, double rebalance_seconds, double timeout_seconds);
   ~CrowdDistribution();
   CrowdDistribution(const CrowdDistribution&) = delete;
   CrowdDistribution& operator=(const CrowdDistribution&) = delete;
@@ -52,6 +54,8 @@ class CrowdDistribution {
   void assign_walkers(Crowd& crowd, double time_s);
   // Every rank's bounds: lo the minimum, hi the maximum.
   void share_bounds(glm::vec3& lo, glm::vec3& hi);
+  // The box of every rank's box: `any` false means this rank has none (lo, hi ignored). False when no rank has one.
+  bool share_box(bool any, glm::vec3& lo, glm::vec3& hi);
   // Reads the renderer's depth and composites every rank's frame; on rank 0 `pixels` becomes the whole frame.
   void composite(const CrowdRenderer& renderer, std::vector<std::uint8_t>& pixels, int width, int height);
   // After each frame: this rank's time for the frame without compositing (ms); feeds the watchdog.

@@ -101,6 +101,27 @@ TEST(MpiCrowd, RanksGiveOneProcesssStateAndFrame) {
   EXPECT_FALSE(fs::exists(tmp / "np2" / "crowd.mp4"));
 }
 
+TEST(MpiCrowd, BenchTimesEveryRanksSlabAndOtherCommandsAreRefusedOnce) {
+  const test::TempDir tmp("strata_mpi_test");
+  const fs::path json = tmp / "bench.json";
+  const CliResult r = mpirun(2, "bench --walkers 10 --frames 20 --level 2 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(j.at("walkers"), 10);
+  const nlohmann::json& m = j.at("mpi");
+  EXPECT_EQ(m.at("ranks"), 2);
+  double walkers = 0;
+  for (const auto& w : m.at("walkers_per_rank")) walkers += w.get<double>();
+  EXPECT_EQ(walkers, 10.0);
+  for (const auto& ms : m.at("compute_ms_mean_per_rank")) EXPECT_GT(ms.get<double>(), 0.0);
+  // One line, exit 2, for a command that would run whole in every rank.
+  const CliResult refused = mpirun(2, "report crowd --json " + (tmp / "crowd.json").string());
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  EXPECT_EQ(refused.out.find("strata report crowd:"), refused.out.rfind("strata report crowd:")) << refused.out;
+  EXPECT_NE(refused.out.find("under mpirun"), std::string::npos) << refused.out;
+  EXPECT_FALSE(fs::exists(tmp / "crowd.json"));
+}
+
 TEST(MpiCrowd, ABadInputIsReportedOnceByRankZero) {
   const test::TempDir tmp("strata_mpi_test");
   const CliResult r = mpirun(2, "crowd --scenario " + (tmp / "missing.json").string() + " --out " + (tmp / "o").string());
