@@ -124,43 +124,31 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& cont
 int run_bench(const BenchOptions& o) {
   // Under mpirun the simulation is timed with the crowd spread over the ranks as `strata crowd` spreads it
   // (apps/crowd_distributed.h): each rank steps the walkers of its slab; rank 0 reports every rank's times.
-  std::unique_ptr<CrowdDistribution> dist;
-  if (CrowdDistribution::launched()) {
-    try {
-      dist = std::make_unique<CrowdDistribution>("bench", o.rebalance_seconds, o.mpi_timeout_seconds);
-    } catch (const std::exception& e) {
-      print_error("bench", error_text(e));
-      return kExitFailure;
-    }
-  }
+  bool join_failed = false;
+  const std::unique_ptr<CrowdDistribution> dist =
+      join_if_launched("bench", o.rebalance_seconds, o.mpi_timeout_seconds, join_failed);
+  if (join_failed) return kExitFailure;
   const bool root = !dist || dist->root();
   // The first refusal with its exit code; under mpirun agreed between the ranks before anyone stops.
-  std::string refusal;
-  int refusal_code = kExitOk;
-  const auto refuse_if = [&](int code, std::string why) {
-    if (refusal.empty() && !why.empty()) refusal = std::move(why), refusal_code = code;
-  };
-  if (root && !o.json.empty()) refuse_if(kExitFailure, check_output_file("--json", o.json));
-  refuse_if(kExitFailure, check_crowd_memory(o.scene));
-  if (o.render) refuse_if(kExitUsage, check_renderer_level(o.renderer, o.scene.level, false));
+  Refusal refusal;
+  if (root && !o.json.empty()) refusal.refuse_if(kExitFailure, check_output_file("--json", o.json));
+  refusal.refuse_if(kExitFailure, check_crowd_memory(o.scene));
+  if (o.render) refusal.refuse_if(kExitUsage, check_renderer_level(o.renderer, o.scene.level, false));
   if (o.render && dist)
-    refuse_if(kExitUsage, "--render under mpirun: the render benchmark times one process's pass (strata crowd "
-                          "composites a distributed frame)");
+    refusal.refuse_if(kExitUsage, "--render under mpirun: the render benchmark times one process's pass (strata "
+                                  "crowd composites a distributed frame)");
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   std::unique_ptr<Crowd> built;
-  if (refusal.empty()) {
+  if (refusal.none()) {
     try {
       check_scene_inputs(o.scene);
       built = build_scene(o.scene);
     } catch (const std::exception& e) {
-      refuse_if(kExitFailure, error_text(e));
+      refusal.refuse_if(kExitFailure, error_text(e));
     }
   }
-  if (dist ? dist->report_failures("bench", refusal) : !refusal.empty()) {
-    if (!dist) print_error("bench", refusal);
-    return refusal.empty() ? kExitFailure : refusal_code;
-  }
+  if (refusal.stop("bench", dist.get())) return refusal.exit_code();
   try {
     std::unique_ptr<Crowd> scene = std::move(built);
     // --render: the context and render target first, so a size the driver refuses fails before the timed frames.

@@ -79,75 +79,53 @@ int run_crowd(const CrowdOptions& o) {
   const fs::path out(o.out);
   // Under mpirun one crowd runs over every process (apps/crowd_distributed.h); joined first, so that a refusal
   // below is agreed by every rank and printed once.
-  std::unique_ptr<CrowdDistribution> dist;
-  if (CrowdDistribution::launched()) {
-    try {
-      dist = std::make_unique<CrowdDistribution>("crowd", o.rebalance_seconds, o.mpi_timeout_seconds);
-    } catch (const std::exception& e) {
-      print_error("crowd", error_text(e));
-      return kExitFailure;
-    }
-  }
+  bool join_failed = false;
+  const std::unique_ptr<CrowdDistribution> dist =
+      join_if_launched("crowd", o.rebalance_seconds, o.mpi_timeout_seconds, join_failed);
+  if (join_failed) return kExitFailure;
   const bool root = !dist || dist->root();
   // Everything that can be refused is refused before any work: the output directory, the memory the crowd
-  // needs, the inputs, then (once a context exists) the image size. Each check runs only while none failed; the
-  // first refusal is kept with its exit code and, under mpirun, agreed between ranks before anyone stops.
-  std::string refusal;
-  int refusal_code = kExitOk;
-  const auto refuse = [&](int code, std::string why) {
-    refusal_code = code;
-    refusal = std::move(why);
-  };
-  // Under mpirun every rank stops when any refused (a rank whose own checks passed leaves with 1).
-  const auto stop_if_refused = [&]() {
-    if (dist) return dist->report_failures("crowd", refusal);
-    if (!refusal.empty()) print_error("crowd", refusal);
-    return !refusal.empty();
-  };
-  if (const std::string why = check_output_dir("--out", out); root && !why.empty()) refuse(kExitFailure, why);
-  if (refusal.empty())
-    if (const std::string why = check_renderer_level(o.renderer, o.scene.level, o.skeleton_overlay); !why.empty())
-      refuse(kExitUsage, why);
-  if (refusal.empty() && dist && o.renderer != RenderBackend::Gl)
-    refuse(kExitUsage, "--renderer embree: a distributed run composites depth, which only the GL renderer keeps");
-  if (refusal.empty())
-    if (const std::string why = check_crowd_memory(o.scene); !why.empty()) refuse(kExitFailure, why);
+  // needs, the inputs, then (once a context exists) the image size. Each check runs only while none failed.
+  Refusal refusal;
+  if (root) refusal.refuse_if(kExitFailure, check_output_dir("--out", out));
+  refusal.refuse_if(kExitUsage, check_renderer_level(o.renderer, o.scene.level, o.skeleton_overlay));
+  if (dist && o.renderer != RenderBackend::Gl)
+    refusal.refuse_if(kExitUsage,
+                      "--renderer embree: a distributed run composites depth, which only the GL renderer keeps");
+  if (refusal.none()) refusal.refuse_if(kExitFailure, check_crowd_memory(o.scene));
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   std::unique_ptr<Crowd> built;
   std::unique_ptr<GlContext> context;
-  if (refusal.empty()) {
+  if (refusal.none()) {
     try {
       check_scene_inputs(o.scene);
       built = build_scene(o.scene);
       context = create_headless_gl_context();
     } catch (const std::exception& e) {
-      refuse(kExitFailure, error_text(e));
+      refusal.refuse_if(kExitFailure, error_text(e));
     }
   }
-  if (refusal.empty())
-    if (const std::string why = check_render_size(context->limits(), o.width, o.height); !why.empty())
-      refuse(kExitFailure, why);
+  if (refusal.none()) refusal.refuse_if(kExitFailure, check_render_size(context->limits(), o.width, o.height));
   // The render targets are made now, before the output directory: a driver may refuse a size inside the limits
   // it reports (llvmpipe caps one resource's bytes, which 4x MSAA at 12000x12000 exceeds), and that must fail
   // here with the flags named, not at the first frame with a bare GL status.
   std::unique_ptr<CrowdRenderer> renderer_owner;
-  if (refusal.empty()) {
+  if (refusal.none()) {
     try {
       renderer_owner = std::make_unique<CrowdRenderer>(o.width, o.height);
     } catch (const std::exception& e) {
-      refuse(kExitFailure, render_target_error(o.width, o.height, context->limits(), e));
+      refusal.refuse_if(kExitFailure, render_target_error(o.width, o.height, context->limits(), e));
     }
   }
   // The output directory is rank 0's alone (the other ranks may be other machines).
-  if (refusal.empty() && root) {
-    const OutputClaim claim = claim_crowd_output_dir(out);
-    if (!claim.refused.empty()) refuse(kExitUsage, claim.refused);
+  if (refusal.none() && root) {
+    refusal.refuse_if(kExitUsage, claim_crowd_output_dir(out).refused);
     std::error_code ec;
-    if (refusal.empty()) fs::create_directories(out, ec);
-    if (refusal.empty() && ec) refuse(kExitFailure, "--out: cannot create " + out.string() + ": " + ec.message());
+    if (refusal.none()) fs::create_directories(out, ec);
+    if (ec) refusal.refuse_if(kExitFailure, "--out: cannot create " + out.string() + ": " + ec.message());
   }
-  if (stop_if_refused()) return refusal_code != kExitOk ? refusal_code : kExitFailure;
+  if (refusal.stop("crowd", dist.get())) return refusal.exit_code();
   CrowdRenderer& renderer = *renderer_owner;
   renderer.options().quality = o.quality;
   renderer.options().backend = o.renderer;

@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "apps/cli_support.h"
 #include "dist/migration.h"
 #include "dist/partition.h"
 #include "profiling/profiler.h"
@@ -30,6 +31,25 @@
 #endif
 
 namespace strata {
+
+std::unique_ptr<CrowdDistribution> join_if_launched(const char* command, double rebalance_seconds,
+                                                    double timeout_seconds, bool& failed) {
+  failed = false;
+  if (!CrowdDistribution::launched()) return nullptr;
+  try {
+    return std::make_unique<CrowdDistribution>(command, rebalance_seconds, timeout_seconds);
+  } catch (const std::exception& e) {
+    cli::print_error(command, cli::error_text(e));
+    failed = true;
+    return nullptr;
+  }
+}
+
+bool Refusal::stop(const char* command, CrowdDistribution* dist) const {
+  if (dist) return dist->report_failures(command, message);
+  if (!message.empty()) cli::print_error(command, message);
+  return !message.empty();
+}
 
 #if defined(STRATA_HAVE_MPI)
 

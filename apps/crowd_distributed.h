@@ -29,6 +29,28 @@ struct Crowd;
 class CrowdRenderer;
 class Profiler;
 
+class CrowdDistribution;
+
+// The start every distributed command shares: joins the job when started by mpirun and returns null otherwise.
+// When joining fails, prints the command's one line and sets `failed`.
+std::unique_ptr<CrowdDistribution> join_if_launched(const char* command, double rebalance_seconds,
+                                                    double timeout_seconds, bool& failed);
+
+// A command's checks before any work: the first refusal is kept with its exit code, and stop() ends the command
+// when there is one — under mpirun agreed between the ranks first and printed once, so that every rank leaves
+// together (a rank whose own checks passed leaves with 1).
+struct Refusal {
+  std::string message;
+  int code = 0;
+  void refuse_if(int exit_code, std::string why) {
+    if (message.empty() && !why.empty()) message = std::move(why), code = exit_code;
+  }
+  bool none() const { return message.empty(); }
+  // True when the command must stop; then exit_code() is its status.
+  bool stop(const char* command, CrowdDistribution* dist) const;
+  int exit_code() const { return message.empty() ? 1 : code; }
+};
+
 class CrowdDistribution {
  public:
   // True when this process was started by mpirun / mpiexec.
