@@ -233,6 +233,17 @@ std::string check_memory(std::uint64_t needed, std::string_view what) {
 
 const char* quality_name(RenderQuality quality) { return quality == RenderQuality::High ? "high" : "low"; }
 
+void add_mpi_options(CLI::App& cmd, double& rebalance_seconds, double& timeout_seconds) {
+  cmd.add_option("--rebalance-seconds", rebalance_seconds,
+                 "Under mpirun: simulated seconds between recutting the ranks' slabs by walker density")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 3600.0));
+  cmd.add_option("--mpi-timeout", timeout_seconds,
+                 "Under mpirun: seconds a rank may go without progress before the job is stopped (0: never)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 86400.0));
+}
+
 void add_quality_option(CLI::App& cmd, RenderQuality& quality) {
   const CLI::Validator low_or_high(
       [](std::string& value) -> std::string {

@@ -69,6 +69,10 @@ struct OutputPath {
 // ..." and returns false.
 bool check_outputs(std::string_view command, std::initializer_list<OutputPath> outputs);
 
+// Under mpirun (apps/crowd_distributed.h): --rebalance-seconds (simulated seconds between recutting the ranks'
+// slabs) and --mpi-timeout (seconds a rank may go without progress before the job is stopped).
+void add_mpi_options(CLI::App& cmd, double& rebalance_seconds, double& timeout_seconds);
+
 // ---- Render targets ---------------------------------------------------------------------------------------------
 // Empty when a width x height image fits the live context (renderbuffer and viewport limits) and the memory its
 // multisampled targets and read-back need (with up to 4 samples, as the renderer takes); otherwise the reason,

@@ -281,14 +281,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                 "Also time the crowd render pass (headless EGL) against raw instanced drawing of the same triangles");
   add_quality_option(*cmd, o->quality);
   add_renderer_option(*cmd, o->renderer);
-  cmd->add_option("--rebalance-seconds", o->rebalance_seconds,
-                  "Under mpirun: simulated seconds between recutting the ranks' slabs by walker density")
-      ->capture_default_str()
-      ->check(CLI::Range(0.01, 3600.0));
-  cmd->add_option("--mpi-timeout", o->mpi_timeout_seconds,
-                  "Under mpirun: seconds a rank may go without progress before the job is stopped (0: never)")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 86400.0));
+  add_mpi_options(*cmd, o->rebalance_seconds, o->mpi_timeout_seconds);
   cmd->add_option("--width", o->width, "Render width for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->add_option("--height", o->height, "Render height for --render")->capture_default_str()->check(whole_in(1, 16384));
   cmd->callback([o, &exit_code] { exit_code = run_bench(*o); });

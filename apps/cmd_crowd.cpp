@@ -400,14 +400,7 @@ void add_crowd_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("!--no-progress", o->progress, "Hide the progress bar");
   cmd->add_flag("--mp4", o->mp4, "Write crowd.mp4 through ffmpeg (the default whenever ffmpeg is on PATH)");
   cmd->add_flag("--no-mp4", o->no_mp4, "Write no video even when ffmpeg is on PATH")->excludes("--mp4");
-  cmd->add_option("--rebalance-seconds", o->rebalance_seconds,
-                  "Under mpirun: simulated seconds between recutting the ranks' slabs by walker density")
-      ->capture_default_str()
-      ->check(CLI::Range(0.01, 3600.0));
-  cmd->add_option("--mpi-timeout", o->mpi_timeout_seconds,
-                  "Under mpirun: seconds a rank may go without progress before the job is stopped (0: never)")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 86400.0));
+  add_mpi_options(*cmd, o->rebalance_seconds, o->mpi_timeout_seconds);
   cmd->add_option("--table1-frames", o->table1_frames,
                   "Frames timed at each body level not drawn, for the fps column of summary.json's table1 (0: none)")
       ->capture_default_str()->check(whole_in(0, 100'000, true));
