@@ -220,6 +220,13 @@ std::uint64_t available_memory_bytes() {
   return best;
 }
 
+long resident_kib() {
+  std::ifstream statm("/proc/self/statm");
+  long size = 0, resident = 0;
+  if (!(statm >> size >> resident)) return -1;
+  return resident * (sysconf(_SC_PAGESIZE) / 1024);
+}
+
 std::string check_memory(std::uint64_t needed, std::string_view what) {
   const std::uint64_t available = available_memory_bytes();
   if (available == 0 || needed <= available) return {};

@@ -111,6 +111,9 @@ int launcher_size();
 std::uint64_t available_memory_bytes();
 // Empty when `needed` bytes fit in what is available (or nothing is known), else a message for `what`.
 std::string check_memory(std::uint64_t needed, std::string_view what);
+// This process's resident set now, KiB (-1 when /proc cannot be read): statm's second field is resident pages.
+// /proc rather than getrusage, whose ru_maxrss is a high-water mark and cannot show memory being given back.
+long resident_kib();
 
 // ---- Signals ---------------------------------------------------------------------------------------------------
 // SIGINT and SIGTERM set a flag that the frame loops read between frames; the run then writes what it has

@@ -43,15 +43,6 @@ struct SoakOptions {
   bool progress = true;
 };
 
-// Resident set size in KiB: statm's second field is resident pages. /proc rather than getrusage: ru_maxrss is a
-// high-water mark and cannot show memory being given back.
-long resident_kib() {
-  std::ifstream statm("/proc/self/statm");
-  long size = 0, resident = 0;
-  if (!(statm >> size >> resident)) return -1;
-  return resident * (sysconf(_SC_PAGESIZE) / 1024);
-}
-
 int run_soak(const SoakOptions& o) {
   if (!check_outputs("soak", {{"--json", o.json}})) return kExitFailure;
   if (const std::string why = check_crowd_memory(o.scene); !why.empty()) {

@@ -19,11 +19,13 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_support.h"
+#include "dist/agent_exchange.h"
 #include "dist/migration.h"
 #include "dist/partition.h"
 #include "profiling/profiler.h"
 #include "render/crowd_renderer.h"
 #include "scene/crowd.h"
+#include "scene/crowd_agents.h"
 #include "scene/state_hash.h"
 
 #if defined(STRATA_HAVE_MPI)
@@ -71,6 +73,11 @@ double p95_of(std::vector<double> v) {
   return v[std::min(v.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(v.size())))];
 }
 
+// CrowdDistribution::Impl::owner for a walker nobody owns (no finite placement: held, culled, by every rank) and
+// for one another rank holds.
+constexpr std::int32_t kNobody = -1;
+constexpr std::int32_t kElsewhere = -2;
+
 template <class T>
 void append_bytes(std::vector<std::uint8_t>& out, const T& value) {
   const auto* p = reinterpret_cast<const std::uint8_t*>(&value);
@@ -86,11 +93,14 @@ struct CrowdDistribution::Impl {
   CrowdPartition partition;
   double next_cut_s = 0.0;
   std::size_t recuts = 0;
+  bool started = false;
   std::vector<Entity> walkers;       // every walker, creation order (the same on every rank)
-  std::vector<float> xs, zs;         // their placements at the last assign_walkers
-  std::vector<std::int32_t> owner;   // their owners then (-1: nobody, a placement not finite)
+  std::vector<std::int32_t> owner;   // their owners at the last assign_walkers: this rank, kNobody or kElsewhere
   std::size_t owned = 0;
-  std::size_t migrated_out = 0, migration_bytes = 0;  // this rank's, over the run
+  // This rank's traffic over the run: walkers and bytes migrated out, placements sent for recuts, ghosts and plan
+  // offers sent and ghosts received (scene/crowd_agents.h AgentExchange).
+  std::size_t migrated_out = 0, migration_bytes = 0, recut_bytes = 0;
+  std::size_t ghost_bytes = 0, plan_bytes = 0, ghosts_received = 0, agent_steps = 0;
   std::vector<double> compute_ms, composite_ms, depth_read_ms, wait_ms;
   std::vector<float> depth;
   std::vector<std::uint8_t> composited;
@@ -120,6 +130,27 @@ struct CrowdDistribution::Impl {
     if (watchdog.joinable()) watchdog.join();
   }
   void beat() { last_beat = now_s(); }
+
+  // The agents' exchange over this job (dist/agent_exchange.h), one Alltoallv each.
+  struct Agents final : AgentExchange {
+    Impl& d;
+    float reach;
+    Agents(Impl& impl, float ghost_reach) : d(impl), reach(ghost_reach) {}
+    void exchange_ghosts(std::span<const AgentSnapshot> mine, std::vector<AgentSnapshot>& ghosts) override {
+      const std::vector<std::vector<std::uint8_t>> to_rank = pack_ghosts(mine, d.partition, d.world.rank(), reach);
+      for (const std::vector<std::uint8_t>& bytes : to_rank) d.ghost_bytes += bytes.size();
+      const std::size_t before = ghosts.size();
+      unpack_ghosts(d.world.exchange(to_rank), ghosts);
+      d.ghosts_received += ghosts.size() - before;
+      ++d.agent_steps;
+    }
+    void select_plans(std::vector<PlanCandidate>& mine, std::size_t take) override {
+      const std::vector<std::uint8_t> offers = pack_plan_offers(mine);
+      const std::vector<std::vector<std::uint8_t>> to_all(static_cast<std::size_t>(d.world.size()), offers);
+      d.plan_bytes += offers.size() * static_cast<std::size_t>(d.world.size() - 1);
+      keep_most_urgent(mine, d.world.exchange(to_all), take);
+    }
+  };
 };
 
 bool CrowdDistribution::launched() { return MpiWorld::launched(); }
@@ -150,42 +181,49 @@ void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
   d.beat();
   const std::vector<Entity> walkers = crowd.world.entities();
   const std::size_t n = walkers.size();
-  // The last step's owners, if the crowd is the one they were given for.
-  const bool had_owners = walkers == d.walkers;
-  d.walkers = walkers;
-  d.xs.resize(n), d.zs.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const EntityLocation at = crowd.world.location(walkers[i]);
-    const SoaTable& t = crowd.world.table(at.table);
-    d.xs[i] = t.f32(kWalkerPlacement, 0)[at.block];
-    d.zs[i] = t.f32(kWalkerPlacement, 2)[at.block];
-  }
-  if (time_s + 1e-9 >= d.next_cut_s || d.partition.ranks() != ranks()) {
-    d.partition = partition_by_density(d.xs, d.zs, ranks());
+  // A crowd not seen before is whole on every rank (built from the same inputs and seed); a known one holds only
+  // this rank's walkers, the rest in its remote table.
+  const bool known = d.started && walkers == d.walkers;
+  if (!known) d.walkers = walkers;
+  if (!known || time_s + 1e-9 >= d.next_cut_s || d.partition.ranks() != ranks()) {
+    std::vector<float> xs, zs;
+    const std::vector<std::uint8_t> mine = pack_placements(crowd);
+    if (known && ranks() > 1) {
+      // Every rank's held walkers' placements to every rank (12 bytes a walker, once a rebalance period).
+      const std::vector<std::vector<std::uint8_t>> to_all(static_cast<std::size_t>(ranks()), mine);
+      const std::vector<std::uint8_t> all = d.world.exchange(to_all);
+      d.recut_bytes += mine.size() * static_cast<std::size_t>(ranks() - 1);
+      unpack_placements(all, xs, zs);
+    } else {
+      unpack_placements(mine, xs, zs);
+    }
+    d.partition = partition_by_density(xs, zs, ranks());
     d.next_cut_s = time_s + d.rebalance_s;
     ++d.recuts;
   }
-  std::vector<std::int32_t> owner(n);
-  for (std::size_t i = 0; i < n; ++i) owner[i] = d.partition.owner(d.xs[i], d.zs[i]);
-  // Walkers this rank animated in the last step and another owns now travel there, row and all
-  // (dist/migration.h). A walker nobody owned (no finite placement) was culled everywhere: nothing to send.
-  if (had_owners && ranks() > 1) {
-    std::vector<std::vector<Entity>> leaving(static_cast<std::size_t>(ranks()));
-    for (std::size_t i = 0; i < n; ++i)
-      if (d.owner[i] == rank() && owner[i] >= 0 && owner[i] != rank())
-        leaving[static_cast<std::size_t>(owner[i])].push_back(walkers[i]);
-    std::vector<std::vector<std::uint8_t>> to_rank(static_cast<std::size_t>(ranks()));
-    for (std::size_t r = 0; r < to_rank.size(); ++r) {
-      pack_walkers(crowd, leaving[r], to_rank[r]);
-      d.migrated_out += leaving[r].size();
-      d.migration_bytes += to_rank[r].size();
-    }
+  if (!known) {
+    keep_owned(crowd, d.partition, rank());
+    d.started = true;
+  } else if (ranks() > 1) {
+    // Walkers this rank held in the last step and another owns now travel there, row and all (dist/migration.h).
+    std::size_t leaving = 0;
+    const std::vector<std::vector<std::uint8_t>> to_rank = pack_leaving(crowd, d.partition, rank(), leaving);
+    d.migrated_out += leaving;
+    for (const std::vector<std::uint8_t>& bytes : to_rank) d.migration_bytes += bytes.size();
     unpack_walkers(crowd, d.world.exchange(to_rank));
   }
-  d.owner = std::move(owner);
   crowd.lod.ownership = d.partition.region(rank());
+  d.owner.assign(n, kElsewhere);
   d.owned = 0;
-  for (std::size_t i = 0; i < n; ++i) d.owned += d.owner[i] == rank();
+  for (std::size_t i = 0; i < n; ++i) {
+    const EntityLocation at = crowd.world.location(walkers[i]);
+    if (at.table == crowd.remote_table) continue;
+    const SoaTable& t = crowd.world.table(at.table);
+    d.owner[i] = d.partition.owner(t.f32(kWalkerPlacement, 0)[at.block], t.f32(kWalkerPlacement, 2)[at.block]);
+    d.owned += d.owner[i] == rank();
+  }
+  if (crowd.agents && !crowd.agents->exchange)
+    crowd.agents->exchange = std::make_shared<Impl::Agents>(d, ghost_reach(crowd.agents->avoidance));
 }
 
 void CrowdDistribution::share_bounds(glm::vec3& lo, glm::vec3& hi) {
@@ -241,10 +279,10 @@ std::uint64_t CrowdDistribution::state_hash(const Crowd& crowd) {
   std::vector<std::size_t> sizes;
   const std::vector<std::uint8_t> all = d.world.gather_to_root(mine, sizes);
   if (!root()) return 0;
-  // A walker nobody owned (no finite placement) was kept by every rank as culled: rank 0's own digest stands.
+  // A walker nobody owned (no finite placement) was held by every rank as culled: rank 0's own digest stands.
   std::vector<std::uint64_t> digests(walkers.size());
   for (std::size_t i = 0; i < walkers.size(); ++i)
-    if (d.owner[i] < 0) digests[i] = walker_state_digest(crowd, walkers[i]);
+    if (d.owner[i] == kNobody) digests[i] = walker_state_digest(crowd, walkers[i]);
   for (std::size_t at = 0; at + 16 <= all.size(); at += 16) {
     std::uint64_t index = 0, digest = 0;
     std::memcpy(&index, &all[at], 8);
@@ -311,6 +349,11 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   const std::vector<double> bytes = d.world.all_gather(static_cast<double>(d.world.bytes_sent()) * per_frame);
   const std::vector<double> migration = d.world.all_gather(static_cast<double>(d.migration_bytes) * per_frame);
   const std::vector<double> migrated = d.world.all_gather(static_cast<double>(d.migrated_out));
+  const std::vector<double> recut = d.world.all_gather(static_cast<double>(d.recut_bytes) * per_frame);
+  const std::vector<double> ghost_bytes = d.world.all_gather(static_cast<double>(d.ghost_bytes) * per_frame);
+  const std::vector<double> plan_bytes = d.world.all_gather(static_cast<double>(d.plan_bytes) * per_frame);
+  const std::vector<double> ghosts = d.world.all_gather(
+      d.agent_steps > 0 ? static_cast<double>(d.ghosts_received) / static_cast<double>(d.agent_steps) : 0.0);
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);  // ru_maxrss: KiB on Linux
   const std::vector<double> peak_rss = d.world.all_gather(static_cast<double>(usage.ru_maxrss) / 1024.0);
@@ -346,9 +389,14 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   j["composite_ms_p95_per_rank"] = composite_p95;
   j["composite_bytes_per_frame_per_rank"] = composite_bytes;
   j["bytes_sent_per_frame_per_rank"] = bytes;
-  // Simulation traffic: the rows of walkers changing owner (every rank advances every gait clock itself).
+  // Simulation traffic: the rows of walkers changing owner, the placements sent for recuts, and for steered agents
+  // the ghosts near the borders and the plan offers (dist/agent_exchange.h).
   j["migration_bytes_per_frame_per_rank"] = migration;
   j["walkers_migrated_per_rank"] = migrated;
+  j["recut_bytes_per_frame_per_rank"] = recut;
+  j["ghost_bytes_per_frame_per_rank"] = ghost_bytes;
+  j["ghosts_received_mean_per_rank"] = ghosts;
+  j["plan_offer_bytes_per_frame_per_rank"] = plan_bytes;
   j["peak_rss_mib_per_rank"] = peak_rss;
   return j;
 }

@@ -60,13 +60,6 @@ struct LodReportOptions {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-long resident_kib() {
-  std::ifstream statm("/proc/self/statm");
-  long size = 0, resident = 0;
-  if (!(statm >> size >> resident)) return -1;
-  return resident * (sysconf(_SC_PAGESIZE) / 1024);
-}
-
 // The process's high-water resident set (VmHWM), KiB: what the largest crowd needed at its peak.
 long peak_resident_kib() {
   std::ifstream status("/proc/self/status");

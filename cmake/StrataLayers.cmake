@@ -48,4 +48,12 @@ function(strata_layer name type)
   target_compile_options(strata_${name} PRIVATE ${STRATA_WARNINGS})
   target_compile_definitions(strata_${name} PUBLIC STRATA_PROFILING=$<BOOL:${STRATA_PROFILING}>)
   set_target_properties(strata_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  strata_unity_batches(strata_${name})
+endfunction()
+
+# STRATA_UNITY_BUILD (CMakeLists.txt says why): the target's files compiled in batches of 8.
+function(strata_unity_batches target)
+  if(STRATA_UNITY_BUILD)
+    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 8)
+  endif()
 endfunction()

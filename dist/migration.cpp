@@ -69,4 +69,72 @@ std::size_t unpack_walkers(Crowd& crowd, std::span<const std::uint8_t> bytes) {
   return items.size();
 }
 
+namespace {
+
+// Calls f(walker, x, z) for every held walker, table by table.
+template <class F>
+void for_each_held(const Crowd& crowd, F&& f) {
+  for (std::size_t s = 0; s < kDetailSlots; ++s) {
+    const SoaTable& t = crowd.world.table(crowd.tables[s]);
+    for (std::uint32_t r = 0; r < t.size(); ++r)
+      f(t.owner(r), t.f32(kWalkerPlacement, 0)[r], t.f32(kWalkerPlacement, 2)[r]);
+  }
+}
+
+}  // namespace
+
+std::size_t keep_owned(Crowd& crowd, const CrowdPartition& partition, int rank) {
+  std::vector<Entity> others;
+  std::size_t owned = 0;
+  for_each_held(crowd, [&](Entity w, float x, float z) {
+    const int owner = partition.owner(x, z);
+    if (owner >= 0 && owner != rank) others.push_back(w);
+    owned += owner == rank;
+  });
+  for (const Entity w : others) crowd.world.move(w, crowd.remote_table);
+  return owned;
+}
+
+std::vector<std::vector<std::uint8_t>> pack_leaving(Crowd& crowd, const CrowdPartition& partition, int rank,
+                                                    std::size_t& leaving) {
+  std::vector<std::vector<Entity>> to(static_cast<std::size_t>(partition.ranks()));
+  for_each_held(crowd, [&](Entity w, float x, float z) {
+    const int owner = partition.owner(x, z);
+    if (owner >= 0 && owner != rank) to[static_cast<std::size_t>(owner)].push_back(w);
+  });
+  std::vector<std::vector<std::uint8_t>> bytes(to.size());
+  leaving = 0;
+  for (std::size_t r = 0; r < to.size(); ++r) {
+    pack_walkers(crowd, to[r], bytes[r]);
+    leaving += to[r].size();
+  }
+  for (const std::vector<Entity>& walkers : to)
+    for (const Entity w : walkers) crowd.world.move(w, crowd.remote_table);
+  return bytes;
+}
+
+std::vector<std::uint8_t> pack_placements(const Crowd& crowd) {
+  std::vector<std::uint8_t> out;
+  for_each_held(crowd, [&](Entity w, float x, float z) {
+    const std::size_t at = out.size();
+    out.resize(at + 12);
+    std::memcpy(out.data() + at, &w.index, 4);
+    std::memcpy(out.data() + at + 4, &x, 4);
+    std::memcpy(out.data() + at + 8, &z, 4);
+  });
+  return out;
+}
+
+void unpack_placements(std::span<const std::uint8_t> bytes, std::vector<float>& xs, std::vector<float>& zs) {
+  if (bytes.size() % 12 != 0)
+    throw std::runtime_error("unpack_placements: " + std::to_string(bytes.size()) + " bytes are not whole walkers");
+  for (std::size_t at = 0; at < bytes.size(); at += 12) {
+    float x, z;
+    std::memcpy(&x, bytes.data() + at + 4, 4);
+    std::memcpy(&z, bytes.data() + at + 8, 4);
+    xs.push_back(x);
+    zs.push_back(z);
+  }
+}
+
 }  // namespace strata

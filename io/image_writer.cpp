@@ -13,7 +13,7 @@
 namespace strata {
 
 namespace {
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& reason) {
+[[noreturn]] void fail_write(const std::filesystem::path& path, const std::string& reason) {
   throw std::runtime_error("write_image: cannot write '" + path.string() + "': " + reason);
 }
 
@@ -53,33 +53,33 @@ const EncoderModule& encoder_module() {
 
 void write_image(const std::filesystem::path& path, int width, int height, int channels,
                  std::span<const std::uint8_t> pixels) {
-  if (width <= 0 || height <= 0) fail(path, "image size must be positive");
-  if (channels != 3 && channels != 4) fail(path, "channels must be 3 or 4, got " + std::to_string(channels));
+  if (width <= 0 || height <= 0) fail_write(path, "image size must be positive");
+  if (channels != 3 && channels != 4) fail_write(path, "channels must be 3 or 4, got " + std::to_string(channels));
   const std::size_t expected = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
                                static_cast<std::size_t>(channels);
   if (pixels.size() != expected)
-    fail(path, "got " + std::to_string(pixels.size()) + " bytes, expected " + std::to_string(expected));
+    fail_write(path, "got " + std::to_string(pixels.size()) + " bytes, expected " + std::to_string(expected));
 
   // Missing directories are the caller's mistake (usually a typo in --out); creating them silently would
   // scatter frames into a path nobody meant, so say which directory is missing instead.
   const std::filesystem::path parent = path.parent_path();
   std::error_code ec;
   if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
-    fail(path, "directory '" + parent.string() + "' does not exist");
+    fail_write(path, "directory '" + parent.string() + "' does not exist");
 
   // Encoded into memory, then written through write_file_atomically (io/atomic_file.h): a temporary sibling
   // renamed into place only when complete. Letting OpenImageIO write the file itself was rejected: its PNG writer
   // ignores a failing write (a full disk, a file-size limit) and reports success over a truncated frame.
   const EncoderModule& module = encoder_module();
-  if (module.encode == nullptr) fail(path, "the image encoder module could not be loaded (" + module.error + ")");
+  if (module.encode == nullptr) fail_write(path, "the image encoder module could not be loaded (" + module.error + ")");
   std::vector<unsigned char> encoded;
   std::string error;
   if (!module.encode(path.string().c_str(), width, height, channels, pixels.data(), &encoded, &error))
-    fail(path, error);
+    fail_write(path, error);
   try {
     write_file_atomically(path, {reinterpret_cast<const char*>(encoded.data()), encoded.size()});
   } catch (const std::exception& e) {
-    fail(path, e.what());
+    fail_write(path, e.what());
   }
 }
 

@@ -12,7 +12,7 @@
 namespace strata {
 namespace {
 
-constexpr char kMagic[8] = {'S', 'T', 'M', 'H', 'P', 'K', '0', '1'};
+constexpr char kPackMagic[8] = {'S', 'T', 'M', 'H', 'P', 'K', '0', '1'};
 // The hm08 body is 13,380 vertices; a bound keeps a corrupt header from asking for gigabytes.
 constexpr std::uint32_t kMaxVertices = 65535, kMaxTriangles = 1u << 20, kMaxJoints = 255;
 
@@ -94,7 +94,7 @@ std::string pack_makehuman_source(const MakeHumanSource& s) {
                 static_cast<uLong>(raw.size()), 9) != Z_OK)
     throw std::runtime_error("makehuman pack: zlib failed");
   packed.resize(packed_size);
-  std::string out(kMagic, sizeof kMagic);
+  std::string out(kPackMagic, sizeof kPackMagic);
   put(out, static_cast<std::uint32_t>(raw.size()));
   put(out, static_cast<std::uint32_t>(packed_size));
   return out + packed;
@@ -102,12 +102,12 @@ std::string pack_makehuman_source(const MakeHumanSource& s) {
 
 MakeHumanSource unpack_makehuman_source(std::string_view bytes, std::string_view name) {
   Reader head(bytes, name);
-  char magic[sizeof kMagic];
+  char magic[sizeof kPackMagic];
   for (char& c : magic) c = head.get<char>("the magic");
-  if (std::memcmp(magic, kMagic, sizeof kMagic) != 0) head.fail("not a packed MakeHuman body (bad magic)");
+  if (std::memcmp(magic, kPackMagic, sizeof kPackMagic) != 0) head.fail("not a packed MakeHuman body (bad magic)");
   const auto raw_size = head.get<std::uint32_t>("the header");
   const auto packed_size = head.get<std::uint32_t>("the header");
-  const std::size_t offset = sizeof kMagic + 8;
+  const std::size_t offset = sizeof kPackMagic + 8;
   if (bytes.size() - offset != packed_size) head.fail("the stream is " + std::to_string(bytes.size() - offset) +
                                                      " bytes, the header says " + std::to_string(packed_size));
   if (raw_size > (64u << 20)) head.fail("raw size " + std::to_string(raw_size) + " is beyond any body");

@@ -19,9 +19,9 @@ constexpr std::uint32_t kMaxPointsPerLine = 64;
 constexpr float kMaxOffset = 1.0f;     // metres; an attachment further than this from its joint is a typo
 constexpr float kMaxMagnitude = 0.5f;  // metres per unit force factor
 
-class Parser {
+class MuscleParser {
  public:
-  Parser(std::string_view source, const Skeleton& skeleton) : source_(source), skeleton_(skeleton) {}
+  MuscleParser(std::string_view source, const Skeleton& skeleton) : source_(source), skeleton_(skeleton) {}
 
   MuscleSet parse(std::string_view text) {
     Json root;
@@ -217,7 +217,7 @@ std::string read_file(const std::string& path) {
 }  // namespace
 
 MuscleSet parse_muscles(std::string_view json, std::string_view source, const Skeleton& skeleton) {
-  return Parser(source, skeleton).parse(json);
+  return MuscleParser(source, skeleton).parse(json);
 }
 
 MuscleSet load_muscle_file(const std::string& path, const Skeleton& skeleton) {

@@ -23,16 +23,16 @@ struct Triangle {
   std::uint32_t group = 0;
 };
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+bool is_field_separator(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 
 // Splits a line into whitespace-separated tokens (views into the line).
 void tokenize(std::string_view line, std::vector<std::string_view>& out) {
   out.clear();
   std::size_t i = 0;
   while (i < line.size()) {
-    while (i < line.size() && is_space(line[i])) ++i;
+    while (i < line.size() && is_field_separator(line[i])) ++i;
     std::size_t j = i;
-    while (j < line.size() && !is_space(line[j])) ++j;
+    while (j < line.size() && !is_field_separator(line[j])) ++j;
     if (j > i) out.push_back(line.substr(i, j - i));
     i = j;
   }

@@ -109,9 +109,9 @@ std::string pointer_escape(const std::string& key) {
   return out;
 }
 
-class Parser {
+class ScenarioParser {
  public:
-  explicit Parser(const std::string& source) : source_(source) {}
+  explicit ScenarioParser(const std::string& source) : source_(source) {}
 
   Scenario parse(std::string_view text) {
     Json root;
@@ -523,7 +523,7 @@ constexpr const char* kShipped[] = {"bottleneck", "circle", "crossing", "plaza",
 }  // namespace
 
 Scenario parse_scenario(std::string_view json, const std::string& source_name) {
-  return Parser(source_name).parse(json);
+  return ScenarioParser(source_name).parse(json);
 }
 
 Scenario load_scenario(const std::string& path) {

@@ -413,10 +413,17 @@ std::optional<MeshFile> load_cache(const std::filesystem::path& file, std::uint6
   return f;
 }
 
+}  // namespace
+
+// Outside the anonymous namespace: NavMesh::Impl (declared in the header) holds one, and a member of an
+// internal-linkage type in a class with external linkage draws -Wsubobject-linkage once this file is compiled
+// inside a unity batch.
 struct DtNavMeshDeleter {
   void operator()(dtNavMesh* m) const { dtFreeNavMesh(m); }
 };
 using DtNavMeshPtr = std::unique_ptr<dtNavMesh, DtNavMeshDeleter>;
+
+namespace {
 
 // A Detour mesh over copies of the tiles (Detour frees them with the mesh); nullptr when Detour refuses any.
 DtNavMeshPtr make_detour(const MeshFile& f) {

@@ -9,13 +9,13 @@
 #include <cmath>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace strata {
 
 namespace {
 constexpr float kPitchLimit = 1.5f;
-constexpr float kPi = 3.14159265358979f;
 
 float clamped_pitch(float pitch) { return std::clamp(pitch, -kPitchLimit, kPitchLimit); }
 }  // namespace
@@ -70,7 +70,7 @@ void OrbitCamera::frame_box_tight(const glm::vec3& box_min, const glm::vec3& box
 }
 
 void OrbitCamera::orbit(float dx_pixels, float dy_pixels, float viewport_height) {
-  const float radians_per_pixel = kPi / std::max(viewport_height, 1.0f);
+  const float radians_per_pixel = glm::pi<float>() / std::max(viewport_height, 1.0f);
   yaw -= dx_pixels * radians_per_pixel;
   pitch = clamped_pitch(pitch + dy_pixels * radians_per_pixel);
 }

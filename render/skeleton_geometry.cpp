@@ -20,7 +20,7 @@ constexpr int kSphereStacks = 8;
 constexpr int kSphereSlices = 12;  // 168 triangles
 
 // A UnitMesh being built: vertices with normalised normals, triangles wound outwards.
-struct Mesh : UnitMesh {
+struct TubeMesh : UnitMesh {
   std::uint16_t add(const glm::vec3& p, const glm::vec3& n) {
     vertices.push_back({p, glm::normalize(n)});
     return static_cast<std::uint16_t>(vertices.size() - 1);
@@ -43,7 +43,7 @@ bool is_finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(
 // (per ring vertex, not per face) so the prism shades like a cone: a bone's basis may rotate about its axis from
 // one frame to the next (see bone_transform) and a faceted prism would visibly flicker when it does.
 UnitMesh make_bone_mesh() {
-  Mesh mesh;
+  TubeMesh mesh;
   const float slope = 1.0f - kTipRatio;  // outward normal of r(y) = 1 - slope * y is (cos, slope, sin)
   std::array<std::uint16_t, kBoneSides> bottom{}, top{};
   for (int k = 0; k < kBoneSides; ++k) {
@@ -73,7 +73,7 @@ UnitMesh make_bone_mesh() {
 
 // Unit UV sphere with single pole vertices (no degenerate triangles) and smooth normals.
 UnitMesh make_sphere_mesh() {
-  Mesh mesh;
+  TubeMesh mesh;
   const float pi = 3.14159265f;
   const std::uint16_t north = mesh.add({0.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f});
   std::vector<std::uint16_t> rings;  // (kSphereStacks - 1) rings of kSphereSlices vertices

@@ -21,7 +21,7 @@ namespace strata {
 
 namespace {
 
-bool is_finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool is_finite_joint(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 }  // namespace
 
@@ -96,7 +96,7 @@ void SkeletonPass::build_instances(const SkeletonDrawInput& input, const RenderO
   for (std::size_t w = 0; w < input.walker_count; ++w) {
     const glm::vec3* pose = input.joint_positions.data() + w * joints;
     for (std::size_t j = 0; j < joints; ++j) {
-      if (!is_finite(pose[j])) continue;
+      if (!is_finite_joint(pose[j])) continue;
       glm::mat4 m = glm::mat4(joint_radii_[j]);
       m[3] = glm::vec4(pose[j], 1.0f);
       joint_instances_.push_back(to_rows(m));

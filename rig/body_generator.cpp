@@ -636,7 +636,7 @@ BodyLevels generate_default_body(const Skeleton& skeleton, const BodyOptions& op
   const Grid grid = sample(model, options.grid_cell);
   const RawMesh raw = extract(grid);
   BodyLevels out;
-  SimplifiedSurface prev{raw.positions, raw.triangles};
+  SimplifiedSurface prev{raw.positions, raw.triangles, {}};
   // Each level is simplified from the previous one: the finest pass does the heavy lifting once.
   for (int l = 0; l < 3; ++l) {
     SimplifiedSurface s = simplify_surface(prev.positions, prev.triangles,

@@ -20,7 +20,7 @@ namespace {
 // Bumped whenever the result for the same inputs would change (the similarity, the triangle weights, the
 // fallback): the key then differs and stale files are ignored.
 constexpr std::uint32_t kCorVersion = 1;
-constexpr char kMagic[8] = {'S', 'T', 'R', 'C', 'O', 'R', '0', '1'};
+constexpr char kCentresMagic[8] = {'S', 'T', 'R', 'C', 'O', 'R', '0', '1'};
 constexpr std::uint64_t kMaxCentres = 1u << 26;
 
 
@@ -184,7 +184,7 @@ std::uint64_t cor_cache_key(const Mesh& mesh, const SkinBinding& binding, const 
 }
 
 std::optional<std::vector<glm::vec3>> load_cor_cache(const std::filesystem::path& file, std::uint64_t key) {
-  const std::optional<std::vector<float>> f = load_float_cache(file, kMagic, key, 3, kMaxCentres);
+  const std::optional<std::vector<float>> f = load_float_cache(file, kCentresMagic, key, 3, kMaxCentres);
   if (!f) return std::nullopt;
   std::vector<glm::vec3> c(f->size() / 3);
   for (std::size_t i = 0; i < c.size(); ++i) c[i] = {(*f)[3 * i], (*f)[3 * i + 1], (*f)[3 * i + 2]};
@@ -194,7 +194,7 @@ std::optional<std::vector<glm::vec3>> load_cor_cache(const std::filesystem::path
 void save_cor_cache(const std::filesystem::path& file, std::uint64_t key, const std::vector<glm::vec3>& centres) {
   std::vector<float> f(3 * centres.size());
   for (std::size_t i = 0; i < centres.size(); ++i) f[3 * i] = centres[i].x, f[3 * i + 1] = centres[i].y, f[3 * i + 2] = centres[i].z;
-  save_float_cache(file, kMagic, key, 3, f);
+  save_float_cache(file, kCentresMagic, key, 3, f);
 }
 
 CorCentres cached_cor_centres(const Mesh& mesh, const SkinBinding& binding, const CorOptions& options) {

@@ -68,7 +68,8 @@ void set_detail_level(Crowd& crowd, DetailLevel level) {
   // next step() (a tool may read a walker's rows in between); with a camera, that step's level-of-detail stage
   // then culls and levels them again. A level switch is rare, so moving every walker is cheap enough.
   const std::uint32_t to = crowd.tables[slot_index(initial_slot(crowd))];
-  for (const Entity walker : crowd.world.entities()) crowd.world.move(walker, to);
+  for (const Entity walker : crowd.world.entities())
+    if (!crowd.is_remote(walker)) crowd.world.move(walker, to);
 }
 
 void set_skinning_mode(Crowd& crowd, SkinningMode mode) {

@@ -41,6 +41,7 @@ void Crowd::make_tables(bool agent_fields) {
                                     ? make_light_walker_table(table_name, agent_fields)
                                     : make_walker_table(table_name, joints, muscle_points, agent_fields));
   }
+  remote_table = world.add_table(make_light_walker_table(name + ".remote", agent_fields));
 }
 
 void Crowd::widen_for_agents() {

@@ -144,6 +144,11 @@ struct Crowd {
 
   World world;
   std::array<std::uint32_t, kDetailSlots> tables{};  // walker table id per DetailSlot
+  // One crowd spread over several processes (dist/): the walkers another process owns. Not one of `tables`, so no
+  // stage reads it: this process keeps only their handles (a narrow row, as the impostors'), and a walker that
+  // becomes this process's arrives with its whole row from its old owner (dist/migration.h). Empty otherwise.
+  std::uint32_t remote_table = 0;
+  bool is_remote(Entity walker) const { return world.location(walker).table == remote_table; }
   RigLibrary rigs;
   RigId rig_id = 0;
   CrowdMotion motion;

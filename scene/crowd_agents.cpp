@@ -18,10 +18,10 @@ namespace strata {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
+constexpr std::uint32_t kGhostRow = ~0u;  // CrowdAgents::order: an agent another process steers
 
-// Uniform [0, 1) and a normal draw from the raw engine output (the standard distributions' algorithms are
-// implementation-defined; the same seed must place the same crowd with any standard library).
-float unit_float(std::mt19937_64& rng) { return static_cast<float>(rng() >> 40) * (1.0f / 16777216.0f); }
+// A normal draw from unit_float (scene/spawn.h), not std::normal_distribution, whose algorithm is
+// implementation-defined: the same seed must place the same crowd with any standard library.
 float normal(std::mt19937_64& rng) {
   const float u = std::max(unit_float(rng), 1e-7f), v = unit_float(rng);
   return std::sqrt(-2.0f * std::log(u)) * std::cos(2.0f * kPi * v);
@@ -176,12 +176,15 @@ void run_navigation_stage(Crowd& crowd, float dt) {
                               slot, static_cast<std::uint32_t>(r)});
     }
   });
-  const std::size_t take = std::min<std::size_t>(a.candidates.size(), a.plans_per_step);
-  const auto most_urgent = [](const CrowdAgents::PlanCandidate& x, const CrowdAgents::PlanCandidate& y) {
-    return x.urgency != y.urgency ? x.urgency > y.urgency : x.walker < y.walker;
-  };
+  std::size_t take = std::min<std::size_t>(a.candidates.size(), a.plans_per_step);
   std::partial_sort(a.candidates.begin(), a.candidates.begin() + static_cast<std::ptrdiff_t>(take), a.candidates.end(),
-                    most_urgent);
+                    more_urgent);
+  if (a.exchange) {
+    // Spread over processes: the budget goes to the whole crowd's most urgent, of which this process plans its own.
+    a.candidates.resize(take);
+    a.exchange->select_plans(a.candidates, a.plans_per_step);
+    take = a.candidates.size();
+  }
   std::sort(a.candidates.begin(), a.candidates.begin() + static_cast<std::ptrdiff_t>(take),
             [](const auto& x, const auto& y) { return x.table != y.table ? x.table < y.table : x.walker < y.walker; });
   for (std::size_t k = 0; k < take;) {
@@ -208,21 +211,51 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
   // The entity index is read once per row, not twice per comparison (10,000 agents: ~270,000 comparisons a step).
   std::sort(a.rows.begin(), a.rows.end(),
             [](const CrowdAgents::Row& x, const CrowdAgents::Row& y) { return x.walker < y.walker; });
-  const std::size_t n = a.rows.size();
-  for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz})
-    v->resize(n);
-  for (std::size_t k = 0; k < n; ++k) {
+  a.mine.resize(a.rows.size());
+  for (std::size_t k = 0; k < a.rows.size(); ++k) {
     const SoaTable& t = crowd.world.table(crowd.tables[a.rows[k].table]);
     const std::size_t r = a.rows[k].row;
     auto f = [&](std::uint32_t c) { return t.f32(kWalkerAgent, c)[r]; };
-    a.px[k] = f(kAgentPx);
-    a.pz[k] = f(kAgentPz);
-    a.vx[k] = f(kAgentVx);
-    a.vz[k] = f(kAgentVz);
-    a.pref_vx[k] = f(kAgentPrefVx);
-    a.pref_vz[k] = f(kAgentPrefVz);
-    a.radius[k] = f(kAgentRadius) + a.radius_margin;
-    a.max_speed[k] = 1.25f * f(kAgentPrefSpeed);
+    a.mine[k] = {a.rows[k].walker, f(kAgentPx), f(kAgentPz), f(kAgentVx), f(kAgentVz), f(kAgentPrefVx),
+                 f(kAgentPrefVz), f(kAgentRadius) + a.radius_margin, 1.25f * f(kAgentPrefSpeed)};
+  }
+  // Spread over processes: the other processes' agents near this one's join in entity order (merged with this
+  // process's, which win a tie: a walker nobody owns is kept by every process), so each of this process's agents
+  // sees the neighbours, in the order, that one process would give it. Rows past `a.rows` are ghosts: solved,
+  // never written back.
+  a.ghosts.clear();
+  if (a.exchange) {
+    a.exchange->exchange_ghosts(a.mine, a.ghosts);
+    std::sort(a.ghosts.begin(), a.ghosts.end(),
+              [](const AgentSnapshot& x, const AgentSnapshot& y) { return x.walker < y.walker; });
+    a.ghosts.erase(std::unique(a.ghosts.begin(), a.ghosts.end(),
+                               [](const AgentSnapshot& x, const AgentSnapshot& y) { return x.walker == y.walker; }),
+                   a.ghosts.end());
+  }
+  a.last_ghosts = a.ghosts.size();
+  const std::size_t n = a.mine.size() + a.ghosts.size();
+  for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz})
+    v->resize(n);
+  a.order.resize(n);
+  {
+    std::size_t i = 0, j = 0, k = 0;
+    const auto put = [&](const AgentSnapshot& s, std::uint32_t source) {
+      a.px[k] = s.px, a.pz[k] = s.pz, a.vx[k] = s.vx, a.vz[k] = s.vz;
+      a.pref_vx[k] = s.pref_vx, a.pref_vz[k] = s.pref_vz, a.radius[k] = s.radius, a.max_speed[k] = s.max_speed;
+      a.order[k++] = source;
+    };
+    while (i < a.mine.size() || j < a.ghosts.size()) {
+      if (j == a.ghosts.size() || (i < a.mine.size() && a.mine[i].walker <= a.ghosts[j].walker)) {
+        if (j < a.ghosts.size() && a.mine[i].walker == a.ghosts[j].walker) ++j;  // kept here too: ours wins
+        put(a.mine[i], static_cast<std::uint32_t>(i));
+        ++i;
+      } else {
+        put(a.ghosts[j++], kGhostRow);
+      }
+    }
+    for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz})
+      v->resize(k);
+    a.order.resize(k);
   }
   const auto start = std::chrono::steady_clock::now();
   AvoidanceJob job;
@@ -242,10 +275,12 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
   job.scratch = &a.scratch;
   run_or_throw(job, "avoidance");
   a.last_avoidance_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  for (std::size_t k = 0; k < n; ++k) {
-    SoaTable& t = crowd.world.table(crowd.tables[a.rows[k].table]);
-    t.f32(kWalkerAgent, kAgentOrcaVx)[a.rows[k].row] = a.new_vx[k];
-    t.f32(kWalkerAgent, kAgentOrcaVz)[a.rows[k].row] = a.new_vz[k];
+  for (std::size_t k = 0; k < a.order.size(); ++k) {
+    if (a.order[k] == kGhostRow) continue;
+    const CrowdAgents::Row& row = a.rows[a.order[k]];
+    SoaTable& t = crowd.world.table(crowd.tables[row.table]);
+    t.f32(kWalkerAgent, kAgentOrcaVx)[row.row] = a.new_vx[k];
+    t.f32(kWalkerAgent, kAgentOrcaVz)[row.row] = a.new_vz[k];
   }
   for_each_agent_table(crowd, [&](SoaTable& t, std::uint32_t) {
     run_or_throw(make_agent_move_job(t, dt, a.move), "agent_move");

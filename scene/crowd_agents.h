@@ -13,6 +13,7 @@
 // threads, and scatters the velocities back.
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,36 @@ namespace strata {
 struct Crowd;
 struct FrameProfile;
 class Profiler;
+
+// One agent as the avoidance stage reads it, for crowds whose agents are steered by several processes (dist/).
+struct AgentSnapshot {
+  std::uint32_t walker = 0;  // entity index: the avoidance order
+  float px = 0, pz = 0, vx = 0, vz = 0, pref_vx = 0, pref_vz = 0;
+  float radius = 0;     // the disc avoidance keeps clear: the agent's radius plus CrowdAgents::radius_margin
+  float max_speed = 0;  // the fastest avoidance may send it
+};
+// A plan request competing for the step's planning budget: the most urgent first, ties by entity index.
+struct PlanCandidate {
+  float urgency = 0;  // seconds overdue; a missing path counts as very overdue
+  std::uint32_t walker = 0, table = 0, row = 0;
+};
+inline bool more_urgent(const PlanCandidate& x, const PlanCandidate& y) {
+  return x.urgency != y.urgency ? x.urgency > y.urgency : x.walker < y.walker;
+}
+
+// What a crowd spread over several processes plugs into the agents' stages (apps/crowd_distributed.h): each
+// process steers only the agents it owns, and two decisions need the others'. Null for a crowd in one process.
+class AgentExchange {
+ public:
+  virtual ~AgentExchange() = default;
+  // Avoidance: `mine` are this process's agents after this step's steering (by entity index); `ghosts` receives,
+  // in any order, every other process's agent that can touch the answer of one of mine (within two neighbour
+  // distances: a neighbour's first-pass velocity enters the second pass).
+  virtual void exchange_ghosts(std::span<const AgentSnapshot> mine, std::vector<AgentSnapshot>& ghosts) = 0;
+  // Planning: `mine` holds this process's `take` most urgent candidates (more_urgent order); on return, those of
+  // them that are among the whole crowd's `take` most urgent, so the budget picks what one process would.
+  virtual void select_plans(std::vector<PlanCandidate>& mine, std::size_t take) = 0;
+};
 
 struct CrowdAgents {
   Scenario scenario;
@@ -52,11 +83,11 @@ struct CrowdAgents {
     std::uint32_t table, row;
   };
   std::vector<Row> rows;
-  struct PlanCandidate {
-    float urgency;  // seconds overdue; a missing path counts as very overdue
-    std::uint32_t walker, table, row;
-  };
+  std::vector<std::uint32_t> order;  // per avoidance input: its index in `rows`, or ~0u for another process's
   std::vector<PlanCandidate> candidates;
+  std::shared_ptr<AgentExchange> exchange;  // set when the crowd is spread over processes
+  std::vector<AgentSnapshot> mine, ghosts;  // scratch of the exchange
+  std::size_t last_ghosts = 0;
   std::vector<std::uint32_t> plan_rows;
   double last_plan_ms = 0, last_avoidance_ms = 0;
   std::size_t last_plans = 0;

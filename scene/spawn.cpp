@@ -15,10 +15,6 @@
 namespace strata {
 namespace {
 
-// Uniform [0, 1) from the raw 64-bit engine output, not std::uniform_real_distribution, whose algorithm is
-// implementation-defined: the same seed must place the same crowd with any standard library.
-float unit_float(std::mt19937_64& rng) { return static_cast<float>(rng() >> 40) * (1.0f / 16777216.0f); }
-
 // Grid cell i of a square-ish grid of n cells `spacing` apart, centred on the origin.
 glm::vec3 grid_position(std::size_t i, std::size_t n, float spacing) {
   const std::size_t columns = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(n))));

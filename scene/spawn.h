@@ -5,6 +5,7 @@
 // A new walker starts in the table of the crowd's current detail level (the NoBody table when nothing is
 // skinned); the level-of-detail stage of its first step() moves it where the camera puts it.
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -34,6 +35,9 @@ struct CrowdConfig {
 // centred on the origin, facing +Z (animation phase, playback rate, heading). Walk: spread over the lanes of a
 // stadium track (height, lane speed, phase, distance along the lane). Mocap: on a grid, out of step.
 void spawn_crowd(Crowd& crowd, const CrowdConfig& config);
+// Uniform [0, 1) from the raw 64-bit engine output (24 bits), not std::uniform_real_distribution, whose algorithm
+// is implementation-defined: the same seed must place the same crowd with any standard library.
+inline float unit_float(std::mt19937_64& rng) { return static_cast<float>(rng() >> 40) * (1.0f / 16777216.0f); }
 // A clip-driven walker at `position`, facing `heading` (rad about +Y), at clip time `phase`, playing `clip`.
 Entity spawn_clip_walker(Crowd& crowd, const glm::vec3& position, float heading, float phase, float rate, int clip);
 // A walking walker on `crowd.motion.paths[path]`: `distance` along it, gait `phase`, body `height` (m), and either

@@ -45,7 +45,8 @@ install_missing() {
 }
 
 build() {
-  cmake -S "$ROOT" -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+  # Unity batches (CMakeLists.txt, STRATA_UNITY_BUILD): about half the compiler time of a clean build.
+  cmake -S "$ROOT" -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release -DSTRATA_UNITY_BUILD=ON >/dev/null
   cmake --build "$BUILD_DIR" -j "$JOBS"
 }
 
@@ -96,7 +97,7 @@ sanitize() {
   # The command's and the tests' own files at -O0 (STRATA_CLI_OPT, STRATA_TEST_OPT; see CMakeLists.txt): half
   # their instrumented compile time, and what they run is the -O1 engine.
   CXX=clang++-14 cmake -S "$ROOT" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O1 -g1" \
-        -DSTRATA_CLI_OPT=-O0 -DSTRATA_TEST_OPT=-O0 \
+        -DSTRATA_CLI_OPT=-O0 -DSTRATA_TEST_OPT=-O0 -DSTRATA_UNITY_BUILD=ON \
         -DSTRATA_SANITIZE=address,undefined -DSTRATA_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build "$dir" -j "$JOBS"
   cd "$dir"

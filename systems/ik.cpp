@@ -21,7 +21,7 @@ using dvec3 = glm::dvec3;
 using dmat3 = glm::dmat3;
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kTwoPi = 2.0 * kPi;
+constexpr double kTwoPiDouble = 2.0 * kPi;
 constexpr double kReachedTolerance = 1e-5;  // m, the kIkReached threshold
 // A goal this far (m) outside the reachable shell still counts as reachable: goals made by FK in float land
 // ~1e-8 m off the exact full-reach distance, and flagging them unreachable would pull them 0.01 % inward.
@@ -42,10 +42,10 @@ bool is_finite(const glm::quat& q) {
 }
 
 // Wraps an angle into (-pi, pi].
-double wrap_angle(double a) {
+double wrap_radians(double a) {
   if (a > -kPi && a <= kPi) return a;
-  a = std::remainder(a, kTwoPi);
-  return a <= -kPi ? a + kTwoPi : a;
+  a = std::remainder(a, kTwoPiDouble);
+  return a <= -kPi ? a + kTwoPiDouble : a;
 }
 
 // Any unit vector perpendicular to unit `n`: the world axis least aligned with it, orthogonalised.
@@ -134,9 +134,9 @@ double violation(const JointLimits& limits, const dvec3& angles) {
 
 // True when some angle congruent to `x` (mod 2 pi) lies in [lo, hi].
 bool angle_in_range(double x, double lo, double hi) {
-  if (hi - lo >= kTwoPi) return true;
-  double k = std::fmod(x - lo, kTwoPi);
-  if (k < 0.0) k += kTwoPi;
+  if (hi - lo >= kTwoPiDouble) return true;
+  double k = std::fmod(x - lo, kTwoPiDouble);
+  if (k < 0.0) k += kTwoPiDouble;
   return lo + k <= hi;
 }
 
@@ -165,14 +165,14 @@ bool hinge_root(double alpha, double beta, double g, double lo, double hi, doubl
   const double delta = std::acos(std::clamp(g / rho, -1.0, 1.0));
   double best_out = 1e300;
   for (double root : {theta0 + delta, theta0 - delta}) {
-    double k = std::fmod(root - lo, kTwoPi);
-    if (k < 0.0) k += kTwoPi;
+    double k = std::fmod(root - lo, kTwoPiDouble);
+    if (k < 0.0) k += kTwoPiDouble;
     const double in = lo + k;  // the representative at or above lo
     if (in <= hi) {
       theta = in;
       return true;
     }
-    const double above = in - hi, below = lo + kTwoPi - in;
+    const double above = in - hi, below = lo + kTwoPiDouble - in;
     if (std::min(above, below) < best_out) best_out = std::min(above, below), theta = above < below ? hi : lo;
   }
   return false;
@@ -218,7 +218,7 @@ struct SwivelChoice {
 // Otherwise returns false and leaves the least violating sample in best_phi/best_cost.
 bool scan_swivel(const SwivelFamily& f, double requested, int samples, double& phi, double& best_phi,
                  double& best_cost) {
-  const double step = kTwoPi / samples;
+  const double step = kTwoPiDouble / samples;
   const int half = samples / 2;
   for (int k = 1; k <= half; ++k) {
     const double up = requested + k * step, down = requested - k * step;
@@ -262,7 +262,7 @@ SwivelChoice choose_swivel(const SwivelFamily& f, double requested) {
 
   // Still nothing. The violation is continuous in phi; minimise it between the best fine sample's neighbours
   // (ternary search: it needs no derivative, and the violation's kinks at limit crossings defeat Newton).
-  const double step = kTwoPi / kFineSwivelSamples;
+  const double step = kTwoPiDouble / kFineSwivelSamples;
   double lo = best_phi - step, hi = best_phi + step;
   for (int i = 0; i < kLocalSearchSteps; ++i) {
     const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
@@ -276,7 +276,7 @@ SwivelChoice choose_swivel(const SwivelFamily& f, double requested) {
   if (local_cost == 0.0) {
     // A feasible arc narrower than a degree: move to its end facing the request. The fine sample between them
     // (one step from `local`, towards the request) is infeasible, or the scan would have stopped there.
-    const double towards = wrap_angle(requested - local) >= 0.0 ? 1.0 : -1.0;
+    const double towards = wrap_radians(requested - local) >= 0.0 ? 1.0 : -1.0;
     out.phi = bisect_boundary(f, local + towards * step, local);
     return out;
   }
@@ -484,7 +484,7 @@ LimbSolveResult solve_limb(const Skeleton& skeleton, const LimbChain& limb, cons
       result.lower = to_quat(r2);
     }
   }
-  result.swivel = static_cast<float>(wrap_angle(choice.phi));
+  result.swivel = static_cast<float>(wrap_radians(choice.phi));
 
   // The error of what is written (the float quaternions), not of the double matrices.
   const dvec3 effector = cu + quat_matrix(result.upper) * (t + quat_matrix(result.middle) * s);

@@ -1,16 +1,16 @@
 #pragma once
 // Ownership: which walkers this process animates, skins and draws when one crowd is spread over several
 // processes (dist/, `mpirun -np K strata crowd`). Each process owns the walkers standing in its slab of the ground
-// (an interval along x or z, dist/partition.h); the rest it keeps as culled walkers, which in a walking crowd
-// only advance their gait clock along their path (simulation level of detail, scene/crowd.h). So ownership is
-// one more culling rule applied after the camera's: a walker outside the slab is decided `culled_slot`, and the
-// frame's later stages skip it exactly as they skip a walker behind the camera. A walker that crosses into the
-// slab leaves the culled table and its walk restarts from the phase and path distance its clock kept, as a
-// walker coming back into view does (scene/step.cpp restart_walks).
+// (an interval along x or z, dist/partition.h). The walkers other processes own are not in its walker tables at
+// all (dist/migration.h keeps them in the crowd's remote table, and a walker changing owner travels with its
+// row), so the tables hold this process's walkers; this job is the culling rule for the rest it still holds:
+// a walker with no finite placement, which nobody owns and every process keeps, is decided `culled_slot`, and
+// the frame's later stages skip it exactly as they skip a walker behind the camera.
 //
-// Rejected: exchanging walkers' rows between processes when they cross a border (migration). A walking walker's
-// whole state is its clock and path position, which every process advances anyway for a few nanoseconds a
-// walker, so a crossing costs no bytes; the rows (kilobytes a walker) would.
+// Rejected: the slab as the only mechanism, every process holding and advancing every walker and culling the
+// others here. No bytes for walkers crossing a border, but every process stepped and stored the whole crowd
+// (about 1.5 GB a rank at 100,000 walkers over 8 ranks), and a walker entering a slab restarted its walk from the
+// clock rather than continuing it.
 //
 // Reads: placement (x and z, components 0 and 2) of `walkers` rows, `stride` apart. Writes: decided[w] =
 // culled_slot for every walker outside [lo, hi) along `axis`; leaves the others' decisions as they are.

@@ -101,6 +101,26 @@ TEST(MpiCrowd, RanksGiveOneProcesssStateAndFrame) {
   EXPECT_FALSE(fs::exists(tmp / "np2" / "crowd.mp4"));
 }
 
+// Steered agents: each rank steers its slab's agents, with the others' near its borders as ghosts.
+TEST(MpiCrowd, SteeredAgentsGiveOneProcesssState) {
+  const test::TempDir tmp("strata_mpi_test");
+  const std::string args = "crowd --scenario crossing --walkers 48 --frames 60 --level 2 --quality low --width 160 "
+                           "--height 90 --rebalance-seconds 1 --no-mp4 --no-progress --no-png --table1-frames 0 ";
+  const CliResult one = test::run_strata(args + "--out " + (tmp / "one").string());
+  ASSERT_EQ(one.status, 0) << one.out;
+  const CliResult r = mpirun(3, args + "--out " + (tmp / "np3").string());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json s = summary_of(tmp / "np3");
+  EXPECT_EQ(s.at("state_hash"), summary_of(tmp / "one").at("state_hash"));
+  const nlohmann::json& m = s.at("mpi");
+  double walkers = 0, ghosts = 0;
+  for (const auto& w : m.at("walkers_per_rank")) walkers += w.get<double>();
+  for (const auto& g : m.at("ghosts_received_mean_per_rank")) ghosts += g.get<double>();
+  EXPECT_EQ(walkers, 48.0);
+  EXPECT_GT(ghosts, 0.0) << "agents met across borders, so the hash tested the ghosts";
+  for (const auto& b : m.at("plan_offer_bytes_per_frame_per_rank")) EXPECT_GT(b.get<double>(), 0.0);
+}
+
 TEST(MpiCrowd, BenchTimesEveryRanksSlabAndOtherCommandsAreRefusedOnce) {
   const test::TempDir tmp("strata_mpi_test");
   const fs::path json = tmp / "bench.json";

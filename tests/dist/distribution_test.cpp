@@ -1,24 +1,32 @@
 // One crowd over several processes, without MPI: the slab partition, the compositing rules, the ownership job,
-// migration, and the claim the distributed run rests on — walkers animated by the process owning their slab, the
-// others only advancing their gait clock, and a walker's row sent to its new owner when it crosses a border,
-// give every walker exactly the state one process gives it. tests/apps/mpi_crowd_test.cpp runs the same through mpirun.
+// migration, the agents' exchange, and the claim the distributed run rests on — walkers held and animated only by
+// the process owning their slab, and a walker's row sent to its new owner when it crosses a border, give every
+// walker exactly the state one process gives it. tests/apps/mpi_crowd_test.cpp runs the same through mpirun.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <barrier>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <random>
+#include <stdexcept>
+#include <thread>
 #include <vector>
 
+#include "dist/agent_exchange.h"
 #include "dist/composite.h"
 #include "dist/migration.h"
 #include "dist/partition.h"
 #include "io/hanim_loader.h"
+#include "io/scenario_file.h"
 #include "rig/body_rig.h"
 #include "scene/body_settings.h"
 #include "scene/crowd.h"
+#include "scene/crowd_agents.h"
 #include "scene/spawn.h"
 #include "scene/state_hash.h"
 #include "scene/step.h"
@@ -136,9 +144,184 @@ TEST(Ownership, CullsWalkersOutsideTheSlabAndRefusesBadInput) {
   EXPECT_FALSE(job.validate());
 }
 
-// The default walking crowd at level 0 over `ranks` crowds, each animating only its slab (recut every
-// `recut_frames`), against one crowd animating everything: every walker's digest at the end equals the single
-// crowd's, from whichever crowd owned it in the last step.
+TEST(AgentExchange, GhostsAreTheAgentsWithinReachOfAnotherSlab) {
+  CrowdPartition partition;
+  partition.axis = 0;
+  partition.cuts = {0.0f, 10.0f};  // slabs (-inf, 0), [0, 10), [10, inf)
+  std::vector<AgentSnapshot> mine;
+  for (const float x : {-30.0f, -8.5f, -1.0f, 4.0f, 12.0f, 18.9f, 19.5f, 40.0f})
+    mine.push_back({static_cast<std::uint32_t>(mine.size()), x, 2.0f, 0.1f, 0.0f, 1.0f, 0.0f, 0.3f, 1.5f});
+  const float reach = 9.0f;
+  const auto to_rank = pack_ghosts(mine, partition, 1, reach);
+  ASSERT_EQ(to_rank.size(), 3u);
+  EXPECT_TRUE(to_rank[1].empty()) << "nothing is sent to oneself";
+  std::vector<AgentSnapshot> got0, got2;
+  unpack_ghosts(to_rank[0], got0);
+  unpack_ghosts(to_rank[2], got2);
+  const auto walkers = [](const std::vector<AgentSnapshot>& v) {
+    std::vector<std::uint32_t> w;
+    for (const AgentSnapshot& a : v) w.push_back(a.walker);
+    return w;
+  };
+  EXPECT_EQ(walkers(got0), (std::vector<std::uint32_t>{0, 1, 2, 3})) << "x < 0 + 9";
+  EXPECT_EQ(walkers(got2), (std::vector<std::uint32_t>{3, 4, 5, 6, 7})) << "x >= 10 - 9";
+  EXPECT_EQ(got2[1].px, 12.0f);
+  EXPECT_EQ(got2[1].radius, 0.3f);
+  EXPECT_EQ(got2[1].max_speed, 1.5f);
+  // Malformed bytes append nothing.
+  std::vector<std::uint8_t> cut(to_rank[0].begin(), to_rank[0].end() - 1);
+  std::vector<AgentSnapshot> none;
+  EXPECT_THROW(unpack_ghosts(cut, none), std::runtime_error);
+  mine[0].radius = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(unpack_ghosts(pack_ghosts(mine, partition, 1, reach)[0], none), std::runtime_error);
+  EXPECT_TRUE(none.empty());
+  EXPECT_GT(ghost_reach(AvoidanceParameters{}), 2.0f * AvoidanceParameters{}.neighbor_distance);
+}
+
+TEST(AgentExchange, PlanBudgetGoesToTheWholeCrowdsMostUrgent) {
+  // Three processes' offers; the crowd's three most urgent are walkers 7 (no path), then 2 and 4 (a three-way tie
+  // at 2 s overdue, broken by the entity index: 2 < 4 < 9, so 9 waits).
+  const std::vector<PlanCandidate> a = {{1e9f, 7, 0, 0}, {0.5f, 1, 0, 1}}, b = {{2.0f, 9, 0, 0}, {2.0f, 4, 0, 1}},
+                                   c = {{2.0f, 2, 0, 0}};
+  std::vector<std::uint8_t> offers;
+  for (const auto* mine : {&a, &b, &c}) {
+    const std::vector<std::uint8_t> bytes = pack_plan_offers(*mine);
+    offers.insert(offers.end(), bytes.begin(), bytes.end());
+  }
+  std::vector<PlanCandidate> ka = a, kb = b, kc = c;
+  keep_most_urgent(ka, offers, 3);
+  keep_most_urgent(kb, offers, 3);
+  keep_most_urgent(kc, offers, 3);
+  ASSERT_EQ(ka.size(), 1u);
+  EXPECT_EQ(ka[0].walker, 7u);
+  ASSERT_EQ(kb.size(), 1u);
+  EXPECT_EQ(kb[0].walker, 4u);
+  ASSERT_EQ(kc.size(), 1u);
+  EXPECT_EQ(kc[0].walker, 2u);
+  offers.pop_back();
+  EXPECT_THROW(keep_most_urgent(ka, offers, 3), std::runtime_error);
+}
+
+// `ranks` threads, each a process of a distributed run, trading bytes as MpiWorld::exchange does: each sends one
+// buffer to every rank and receives what every rank sent it, concatenated in rank order.
+class ThreadedRanks {
+ public:
+  explicit ThreadedRanks(int ranks)
+      : ranks_(ranks), sync_(ranks), mail_(static_cast<std::size_t>(ranks), std::vector<std::vector<std::uint8_t>>(static_cast<std::size_t>(ranks))) {}
+  std::vector<std::uint8_t> exchange(int me, const std::vector<std::vector<std::uint8_t>>& to_rank) {
+    for (int r = 0; r < ranks_; ++r) mail_[static_cast<std::size_t>(r)][static_cast<std::size_t>(me)] = to_rank[static_cast<std::size_t>(r)];
+    sync_.arrive_and_wait();
+    std::vector<std::uint8_t> out;
+    for (const std::vector<std::uint8_t>& from : mail_[static_cast<std::size_t>(me)]) out.insert(out.end(), from.begin(), from.end());
+    sync_.arrive_and_wait();  // every rank has read its mail before anyone writes the next round's
+    return out;
+  }
+  std::vector<std::uint8_t> all_gather(int me, const std::vector<std::uint8_t>& mine) {
+    return exchange(me, std::vector<std::vector<std::uint8_t>>(static_cast<std::size_t>(ranks_), mine));
+  }
+
+ private:
+  int ranks_;
+  std::barrier<> sync_;
+  std::vector<std::vector<std::vector<std::uint8_t>>> mail_;  // [to][from]
+};
+
+struct ThreadedAgents final : AgentExchange {
+  ThreadedRanks& hub;
+  int rank;
+  const CrowdPartition& partition;
+  float reach;
+  std::size_t ghosts = 0;
+  ThreadedAgents(ThreadedRanks& h, int r, const CrowdPartition& p, float g) : hub(h), rank(r), partition(p), reach(g) {}
+  void exchange_ghosts(std::span<const AgentSnapshot> mine, std::vector<AgentSnapshot>& out) override {
+    const std::size_t before = out.size();
+    unpack_ghosts(hub.exchange(rank, pack_ghosts(mine, partition, rank, reach)), out);
+    ghosts += out.size() - before;
+  }
+  void select_plans(std::vector<PlanCandidate>& mine, std::size_t take) override {
+    keep_most_urgent(mine, hub.all_gather(rank, pack_plan_offers(mine)), take);
+  }
+};
+
+// A scenario's steered agents over `ranks` threads, each holding and steering only its slab's agents (ghosts and
+// plan offers exchanged every step, walkers migrating, slabs recut every second): every agent's state at the end
+// equals one crowd's.
+TEST(AgentExchange, SteeredAgentsOverRanksMatchOneCrowd) {
+  constexpr int kRanks = 3, kFrames = 75;
+  const Scenario scenario = shipped_scenario("crossing");
+  const auto make = [&] {
+    auto crowd = std::make_unique<Crowd>(to_rig(load_default_humanoid()));
+    set_detail_level(*crowd, DetailLevel::none());
+    ScenarioSetup setup;
+    setup.use_cache = false;
+    setup.agents = 48;
+    set_scenario(*crowd, scenario, setup);
+    return crowd;
+  };
+  auto single = make();
+  std::vector<std::unique_ptr<Crowd>> parts;
+  for (int r = 0; r < kRanks; ++r) parts.push_back(make());
+  const float dt = 1.0f / 30.0f;
+  ThreadedRanks hub(kRanks);
+  std::vector<CrowdPartition> partitions(kRanks);  // each rank's copy, as each process has its own
+  std::vector<std::size_t> ghosts(kRanks), migrated(kRanks);
+  std::vector<std::thread> threads;
+  for (int r = 0; r < kRanks; ++r)
+    threads.emplace_back([&, r] {
+      try {
+        Crowd& crowd = *parts[static_cast<std::size_t>(r)];
+        CrowdPartition& partition = partitions[static_cast<std::size_t>(r)];
+        auto agents = std::make_shared<ThreadedAgents>(hub, r, partition, ghost_reach(crowd.agents->avoidance));
+        crowd.agents->exchange = agents;
+        Profiler profiler(4, false);
+        for (int f = 0; f < kFrames; ++f) {
+          if (f % 30 == 0) {
+            std::vector<float> xs, zs;
+            unpack_placements(f == 0 ? pack_placements(crowd) : hub.all_gather(r, pack_placements(crowd)), xs, zs);
+            partition = partition_by_density(xs, zs, kRanks);
+          }
+          if (f == 0) {
+            keep_owned(crowd, partition, r);
+          } else {
+            std::size_t leaving = 0;
+            const auto to_rank = pack_leaving(crowd, partition, r, leaving);
+            migrated[static_cast<std::size_t>(r)] += leaving;
+            unpack_walkers(crowd, hub.exchange(r, to_rank));
+          }
+          crowd.lod.ownership = partition.region(r);
+          step(crowd, dt, profiler);
+        }
+        ghosts[static_cast<std::size_t>(r)] = agents->ghosts;
+      } catch (const std::exception& e) {
+        // A failing rank would leave the others waiting at the barrier: end the test process loudly instead.
+        std::fprintf(stderr, "rank %d: %s\n", r, e.what());
+        std::abort();
+      }
+    });
+  Profiler profiler(4, false);
+  for (int f = 0; f < kFrames; ++f) step(*single, dt, profiler);
+  for (std::thread& t : threads) t.join();
+  const std::vector<Entity> walkers = single->world.entities();
+  ASSERT_EQ(walkers.size(), 48u);
+  for (std::size_t i = 0; i < walkers.size(); ++i) {
+    int holders = 0;
+    for (const auto& part : parts) {
+      if (part->is_remote(walkers[i])) continue;
+      ++holders;
+      EXPECT_EQ(walker_state_digest(*part, walkers[i]), walker_state_digest(*single, walkers[i])) << "agent " << i;
+    }
+    EXPECT_EQ(holders, 1) << "agent " << i;
+  }
+  std::size_t all_ghosts = 0, all_migrated = 0;
+  for (int r = 0; r < kRanks; ++r) all_ghosts += ghosts[static_cast<std::size_t>(r)], all_migrated += migrated[static_cast<std::size_t>(r)];
+  EXPECT_GT(all_ghosts, 0u) << "agents met across a border, so the ghosts were tested";
+  EXPECT_GT(all_migrated, 0u) << "agents crossed a border, so migration with agents was tested";
+}
+
+// The default walking crowd over `ranks` crowds, each holding and animating only its slab's walkers (the rest in
+// its remote table; recut every `recut_frames` from every crowd's held placements), against one crowd animating
+// everything: every walker's digest at the end equals the single crowd's, from the one crowd that holds it. The
+// bytes move between the crowds here as MPI moves them between processes (apps/crowd_distributed.cpp).
 void expect_partitioned_crowd_matches(int ranks, int frames, int recut_frames) {
   const auto make = [] {
     Rig rig = to_rig(load_default_humanoid());
@@ -157,30 +340,31 @@ void expect_partitioned_crowd_matches(int ranks, int frames, int recut_frames) {
   Profiler profiler(4, false);
   const float dt = 1.0f / 30.0f;
   CrowdPartition partition;
-  std::vector<int> owner;
-  std::size_t owner_changes = 0;
+  std::size_t migrated = 0;
   for (int f = 0; f < frames; ++f) {
-    const std::vector<Entity> walkers = single->world.entities();
-    std::vector<float> xs, zs;
-    for (const Entity e : walkers) {
-      const EntityLocation at = parts[0]->world.location(e);
-      const SoaTable& t = parts[0]->world.table(at.table);
-      xs.push_back(t.f32(kWalkerPlacement, 0)[at.block]);
-      zs.push_back(t.f32(kWalkerPlacement, 2)[at.block]);
+    if (f % recut_frames == 0) {
+      // At the start every crowd is whole, so one crowd's placements are everyone's; later each holds its own.
+      std::vector<float> xs, zs;
+      for (int r = 0; r < (f == 0 ? 1 : ranks); ++r) unpack_placements(pack_placements(*parts[static_cast<std::size_t>(r)]), xs, zs);
+      ASSERT_EQ(xs.size(), single->walker_count()) << "frame " << f << ": every walker held exactly once";
+      partition = partition_by_density(xs, zs, ranks);
     }
-    if (f % recut_frames == 0) partition = partition_by_density(xs, zs, ranks);
-    std::vector<int> now(walkers.size());
-    for (std::size_t i = 0; i < walkers.size(); ++i) now[i] = partition.owner(xs[i], zs[i]);
-    if (!owner.empty())
-      for (std::size_t i = 0; i < now.size(); ++i)
-        if (now[i] != owner[i]) {
-          // The old owner's row travels to the new owner (dist/migration.h), as MPI carries it between processes.
-          ++owner_changes;
-          std::vector<std::uint8_t> bytes;
-          pack_walkers(*parts[static_cast<std::size_t>(owner[i])], std::span<const Entity>(&walkers[i], 1), bytes);
-          EXPECT_EQ(unpack_walkers(*parts[static_cast<std::size_t>(now[i])], bytes), 1u);
-        }
-    owner = now;
+    if (f == 0) {
+      for (int r = 0; r < ranks; ++r) keep_owned(*parts[static_cast<std::size_t>(r)], partition, r);
+    } else {
+      std::vector<std::vector<std::uint8_t>> inbox(static_cast<std::size_t>(ranks));
+      for (int r = 0; r < ranks; ++r) {
+        std::size_t leaving = 0;
+        const auto to_rank = pack_leaving(*parts[static_cast<std::size_t>(r)], partition, r, leaving);
+        ASSERT_TRUE(to_rank[static_cast<std::size_t>(r)].empty());
+        migrated += leaving;
+        for (int d = 0; d < ranks; ++d)
+          inbox[static_cast<std::size_t>(d)].insert(inbox[static_cast<std::size_t>(d)].end(),
+                                                    to_rank[static_cast<std::size_t>(d)].begin(),
+                                                    to_rank[static_cast<std::size_t>(d)].end());
+      }
+      for (int r = 0; r < ranks; ++r) unpack_walkers(*parts[static_cast<std::size_t>(r)], inbox[static_cast<std::size_t>(r)]);
+    }
     for (int r = 0; r < ranks; ++r) {
       parts[static_cast<std::size_t>(r)]->lod.ownership = partition.region(r);
       step(*parts[static_cast<std::size_t>(r)], dt, profiler);
@@ -188,17 +372,17 @@ void expect_partitioned_crowd_matches(int ranks, int frames, int recut_frames) {
     step(*single, dt, profiler);
   }
   const std::vector<Entity> walkers = single->world.entities();
-  std::size_t culled_somewhere = 0;
   for (std::size_t i = 0; i < walkers.size(); ++i) {
-    ASSERT_GE(owner[i], 0);
-    const Crowd& by_owner = *parts[static_cast<std::size_t>(owner[i])];
-    EXPECT_EQ(walker_state_digest(by_owner, walkers[i]), walker_state_digest(*single, walkers[i])) << "walker " << i;
-    for (int r = 0; r < ranks; ++r)
-      if (r != owner[i]) culled_somewhere += parts[static_cast<std::size_t>(r)]->slot_of(walkers[i]) == DetailSlot::Culled;
+    int holders = 0;
+    for (const auto& part : parts) {
+      if (part->is_remote(walkers[i])) continue;
+      ++holders;
+      EXPECT_EQ(walker_state_digest(*part, walkers[i]), walker_state_digest(*single, walkers[i])) << "walker " << i;
+    }
+    EXPECT_EQ(holders, 1) << "walker " << i << " is held by exactly one crowd, remote in the others";
   }
-  EXPECT_EQ(culled_somewhere, walkers.size() * static_cast<std::size_t>(ranks - 1))
-      << "a walker is kept culled by every rank but its owner";
-  EXPECT_GT(owner_changes, 0u) << "the run must move some walkers across a border to test anything";
+  for (const auto& part : parts) EXPECT_TRUE(is_light_walker_table(part->world.table(part->remote_table)));
+  EXPECT_GT(migrated, 0u) << "the run must move some walkers across a border to test anything";
 }
 
 TEST(PartitionedCrowd, EveryWalkerMatchesOneProcessAcrossBorderCrossings) {

@@ -1,0 +1,98 @@
+#include "dist/agent_exchange.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+namespace strata {
+namespace {
+
+// The wire form of a ghost: the entity index and eight floats, no padding.
+constexpr std::size_t kGhostBytes = 4 + 8 * 4;
+// Of a plan offer: urgency and entity index.
+constexpr std::size_t kOfferBytes = 4 + 4;
+
+void put(std::vector<std::uint8_t>& out, const void* p, std::size_t n) {
+  const auto* b = static_cast<const std::uint8_t*>(p);
+  out.insert(out.end(), b, b + n);
+}
+
+}  // namespace
+
+float ghost_reach(const AvoidanceParameters& params) { return 2.0f * params.neighbor_distance + 1.0f; }
+
+std::vector<std::vector<std::uint8_t>> pack_ghosts(std::span<const AgentSnapshot> mine,
+                                                   const CrowdPartition& partition, int rank, float reach) {
+  const int ranks = partition.ranks();
+  std::vector<std::vector<std::uint8_t>> to_rank(static_cast<std::size_t>(ranks));
+  for (int r = 0; r < ranks; ++r) {
+    if (r == rank) continue;
+    const OwnershipRegion region = partition.region(r);
+    std::vector<std::uint8_t>& out = to_rank[static_cast<std::size_t>(r)];
+    for (const AgentSnapshot& s : mine) {
+      const float c = region.axis == 0 ? s.px : s.pz;
+      if (!(c >= region.lo - reach && c < region.hi + reach)) continue;
+      const float values[8] = {s.px, s.pz, s.vx, s.vz, s.pref_vx, s.pref_vz, s.radius, s.max_speed};
+      put(out, &s.walker, 4);
+      put(out, values, sizeof values);
+    }
+  }
+  return to_rank;
+}
+
+void unpack_ghosts(std::span<const std::uint8_t> bytes, std::vector<AgentSnapshot>& out) {
+  if (bytes.size() % kGhostBytes != 0)
+    throw std::runtime_error("unpack_ghosts: " + std::to_string(bytes.size()) + " bytes are not whole agents");
+  const std::size_t n = bytes.size() / kGhostBytes;
+  const std::size_t start = out.size();
+  out.resize(start + n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint8_t* p = bytes.data() + k * kGhostBytes;
+    AgentSnapshot& s = out[start + k];
+    float v[8];
+    std::memcpy(&s.walker, p, 4);
+    std::memcpy(v, p + 4, sizeof v);
+    const bool finite = std::all_of(std::begin(v), std::end(v), [](float x) { return std::isfinite(x); });
+    if (!finite || !(v[6] > 0.0f) || v[7] < 0.0f) {
+      out.resize(start);
+      throw std::runtime_error("unpack_ghosts: agent " + std::to_string(s.walker) +
+                               " has a non-finite value, a radius <= 0 or a negative speed");
+    }
+    s.px = v[0], s.pz = v[1], s.vx = v[2], s.vz = v[3], s.pref_vx = v[4], s.pref_vz = v[5];
+    s.radius = v[6], s.max_speed = v[7];
+  }
+}
+
+std::vector<std::uint8_t> pack_plan_offers(std::span<const PlanCandidate> mine) {
+  std::vector<std::uint8_t> out;
+  out.reserve(mine.size() * kOfferBytes);
+  for (const PlanCandidate& c : mine) {
+    put(out, &c.urgency, 4);
+    put(out, &c.walker, 4);
+  }
+  return out;
+}
+
+void keep_most_urgent(std::vector<PlanCandidate>& mine, std::span<const std::uint8_t> offers, std::size_t take) {
+  if (offers.size() % kOfferBytes != 0)
+    throw std::runtime_error("keep_most_urgent: " + std::to_string(offers.size()) + " bytes are not whole offers");
+  std::vector<PlanCandidate> all(offers.size() / kOfferBytes);
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    std::memcpy(&all[k].urgency, offers.data() + k * kOfferBytes, 4);
+    std::memcpy(&all[k].walker, offers.data() + k * kOfferBytes + 4, 4);
+    if (std::isnan(all[k].urgency)) throw std::runtime_error("keep_most_urgent: a NaN urgency");
+  }
+  take = std::min(take, all.size());
+  std::partial_sort(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(take), all.end(), more_urgent);
+  all.resize(take);
+  // The chosen, by entity index, to look up this process's own.
+  std::vector<std::uint32_t> chosen;
+  chosen.reserve(take);
+  for (const PlanCandidate& c : all) chosen.push_back(c.walker);
+  std::sort(chosen.begin(), chosen.end());
+  std::erase_if(mine, [&](const PlanCandidate& c) { return !std::binary_search(chosen.begin(), chosen.end(), c.walker); });
+}
+
+}  // namespace strata
