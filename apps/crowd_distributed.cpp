@@ -226,6 +226,13 @@ void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
     crowd.agents->exchange = std::make_shared<Impl::Agents>(d, ghost_reach(crowd.agents->avoidance));
 }
 
+std::vector<double> CrowdDistribution::all_gather(double value) { return impl_->world.all_gather(value); }
+
+std::vector<std::uint8_t> CrowdDistribution::gather_to_root(std::span<const std::uint8_t> bytes) {
+  std::vector<std::size_t> sizes;
+  return impl_->world.gather_to_root(bytes, sizes);
+}
+
 void CrowdDistribution::share_bounds(glm::vec3& lo, glm::vec3& hi) {
   float l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
   impl_->world.min_max(l, h);
@@ -421,6 +428,10 @@ int CrowdDistribution::ranks() const { return 1; }
 bool CrowdDistribution::all_ok(bool ok) { return ok; }
 bool CrowdDistribution::report_failures(const std::string&, const std::string& e) { return !e.empty(); }
 void CrowdDistribution::assign_walkers(Crowd&, double) {}
+std::vector<double> CrowdDistribution::all_gather(double value) { return {value}; }
+std::vector<std::uint8_t> CrowdDistribution::gather_to_root(std::span<const std::uint8_t> bytes) {
+  return {bytes.begin(), bytes.end()};
+}
 void CrowdDistribution::share_bounds(glm::vec3&, glm::vec3&) {}
 bool CrowdDistribution::share_box(bool any, glm::vec3&, glm::vec3&) { return any; }
 void CrowdDistribution::composite(const CrowdRenderer&, std::vector<std::uint8_t>&, int, int) {}

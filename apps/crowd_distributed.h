@@ -1,5 +1,6 @@
 #pragma once
-// What `strata crowd` (and `strata bench`, for the simulation) does differently when started by mpirun
+// What `strata crowd` (and `strata bench` and `strata report crowd`, for the simulation) does differently when
+// started by mpirun
 // (docs/scale-out.md): one crowd over K processes.
 //
 //   every rank   builds the same crowd from the same inputs and seed, and advances every walker's gait clock
@@ -17,6 +18,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -74,6 +76,10 @@ class CrowdDistribution {
   // Before each step: recuts the slabs when due (at `time_s` 0 and every rebalance period after), gives the crowd
   // this rank's slab, and records every walker's owner for this frame.
   void assign_walkers(Crowd& crowd, double time_s);
+  // Every rank's value, in rank order, on every rank.
+  std::vector<double> all_gather(double value);
+  // Rank 0 receives every rank's bytes concatenated in rank order; the others get an empty vector.
+  std::vector<std::uint8_t> gather_to_root(std::span<const std::uint8_t> bytes);
   // Every rank's bounds: lo the minimum, hi the maximum.
   void share_bounds(glm::vec3& lo, glm::vec3& hi);
   // The box of every rank's box: `any` false means this rank has none (lo, hi ignored). False when no rank has one.

@@ -10,11 +10,14 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
+#include <numeric>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "apps/cli_support.h"
+#include "apps/crowd_distributed.h"
 #include "apps/commands.h"
 #include "apps/json_output.h"
 #include "apps/scene_options.h"
@@ -36,7 +39,19 @@ struct CrowdReportOptions {
   std::string json;
   bool keep_going = false;  // run the whole duration even when every agent has arrived
   bool body = false;
+  double rebalance_seconds = 2.0;  // under mpirun (apps/crowd_distributed.h)
+  double mpi_timeout_seconds = 600.0;
 };
+
+// Under mpirun: every rank's agents' observations, gathered on rank 0 (28 bytes an agent a step, which grows with
+// the crowd: a report's price for figures equal to one process's, overlaps across borders included).
+std::vector<AgentObservation> gather_observations(CrowdDistribution& dist, const std::vector<AgentObservation>& mine) {
+  const std::vector<std::uint8_t> all = dist.gather_to_root(
+      std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(mine.data()), mine.size() * sizeof(AgentObservation)));
+  std::vector<AgentObservation> out(all.size() / sizeof(AgentObservation));
+  if (!out.empty()) std::memcpy(out.data(), all.data(), out.size() * sizeof(AgentObservation));
+  return out;
+}
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
@@ -45,19 +60,36 @@ double percentile(std::vector<double> v, double p) {
 }
 
 int run_crowd_report(const CrowdReportOptions& o) {
-  if (!check_outputs("report crowd", {{"--json", o.json}})) return kExitFailure;
+  // Under mpirun each rank steps the agents of its slab (apps/crowd_distributed.h); rank 0 observes them all.
+  bool join_failed = false;
+  const std::unique_ptr<CrowdDistribution> dist =
+      join_if_launched("report crowd", o.rebalance_seconds, o.mpi_timeout_seconds, join_failed);
+  if (join_failed) return kExitFailure;
+  const bool root = !dist || dist->root();
+  Refusal refusal;
+  if (root && !o.json.empty()) refusal.refuse_if(kExitFailure, check_output_file("--json", o.json));
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+  std::unique_ptr<Crowd> built;
+  if (refusal.none()) {
+    try {
+      if (o.scene.scenario.empty())
+        throw std::invalid_argument("--scenario is required (circle, crossing, bottleneck, plaza or a file)");
+      SceneOptions scene_options = o.scene;
+      if (!o.body) scene_options.level = DetailLevel::none();
+      else if (scene_options.level.is_automatic() || scene_options.level.is_impostor()) scene_options.level = DetailLevel::mesh(0);
+      check_scene_inputs(scene_options);
+      built = build_scene(scene_options);
+      if (!built->agents)
+        throw std::invalid_argument("--scenario " + o.scene.scenario + " has no agents (the track is the lane walk; "
+                                    "use `strata report gait` for it)");
+    } catch (const std::exception& e) {
+      refusal.refuse_if(kExitFailure, error_text(e));
+    }
+  }
+  if (refusal.stop("report crowd", dist.get())) return refusal.exit_code();
   try {
-    if (o.scene.scenario.empty()) throw std::invalid_argument("--scenario is required (circle, crossing, bottleneck, plaza or a file)");
-    SceneOptions scene_options = o.scene;
-    if (!o.body) scene_options.level = DetailLevel::none();
-    else if (scene_options.level.is_automatic() || scene_options.level.is_impostor()) scene_options.level = DetailLevel::mesh(0);
-    check_scene_inputs(scene_options);
-    std::unique_ptr<Crowd> scene = build_scene(scene_options);
-    if (!scene->agents)
-      throw std::invalid_argument("--scenario " + o.scene.scenario + " has no agents (the track is the lane walk; use "
-                                  "`strata report gait` for it)");
+    const std::unique_ptr<Crowd> scene = std::move(built);
     const Scenario& scenario = scene->agents->scenario;
     const double seconds = o.seconds > 0 ? o.seconds : scenario.duration_s;
     GaitMetrics gait(scene->rig().skeleton, *scene->motion.locomotion, scene->motion.style);
@@ -66,22 +98,41 @@ int run_crowd_report(const CrowdReportOptions& o) {
     const float dt = 1.0f / o.fps;
     auto frames = static_cast<std::size_t>(seconds * o.fps + 0.5);
     std::vector<double> avoidance_ms, navigation_ms;
+    std::vector<AgentObservation> observed;
+    std::vector<std::uint32_t> walker_ids;
     std::size_t done = 0;
     bool all_arrived = false;
-    for (; done < frames && !interrupted(); ++done) {
+    const auto stop_now = [&]() { return dist ? !dist->all_ok(!interrupted()) : interrupted(); };
+    for (; done < frames && !stop_now(); ++done) {
+      if (dist) dist->assign_walkers(*scene, static_cast<double>(done) * dt);
       profiler.begin_frame();
       const FrameProfile p = step(*scene, dt, profiler);
       profiler.end_frame();
       avoidance_ms.push_back(scene->agents->last_avoidance_ms);
       navigation_ms.push_back(p.stage_ms(Stage::Navigation));
-      metrics.observe(*scene, dt);
-      gait.observe(scene->lanes(), scene->motion.paths, dt);
+      if (dist) {
+        observed.clear();
+        collect_agent_observations(*scene, observed);
+        const std::vector<AgentObservation> everyone = gather_observations(*dist, observed);
+        if (root) metrics.observe(everyone, dt);
+      } else {
+        metrics.observe(*scene, dt);
+      }
+      // The walkers' own table, followed walker by walker: under mpirun its rows change as walkers migrate.
+      // (No camera, so no culling or tiers: one table holds them; lanes() throws otherwise.)
+      const WalkerLanes lanes = scene->lanes();
+      walker_ids.clear();
+      for (std::size_t slot = 0; slot < kDetailSlots; ++slot) {
+        const SoaTable& t = scene->table(static_cast<DetailSlot>(slot));
+        for (std::uint32_t r = 0; r < t.size(); ++r) walker_ids.push_back(t.owner(r).index);
+      }
+      gait.observe(lanes, scene->motion.paths, dt, walker_ids);
       // Final goals: stop a second after the last agent arrives (the last ones settle into their stance).
       const bool cycling = std::any_of(scenario.groups.begin(), scenario.groups.end(), [](const SpawnGroup& g) {
         return g.goal.kind == GoalKind::Random || g.goal.kind == GoalKind::Waypoints;
       });
       if (!o.keep_going && !cycling) {
-        if (!all_arrived && all_agents_arrived(*scene)) {
+        if (!all_arrived && (dist ? dist->all_ok(all_agents_arrived(*scene)) : all_agents_arrived(*scene))) {
           all_arrived = true;
           const auto settle = static_cast<std::size_t>(o.fps);
           frames = std::min(frames, done + settle + 1);
@@ -89,13 +140,33 @@ int run_crowd_report(const CrowdReportOptions& o) {
       }
     }
     const CrowdMetricsReport r = metrics.report();
-    const GaitReport g = gait.report();
+    GaitReport g = gait.report();
     double avoidance_mean = 0;
     for (const double v : avoidance_ms) avoidance_mean += v;
     avoidance_mean /= std::max<std::size_t>(avoidance_ms.size(), 1);
     double navigation_mean = 0;
     for (const double v : navigation_ms) navigation_mean += v;
     navigation_mean /= std::max<std::size_t>(navigation_ms.size(), 1);
+    nlohmann::json mpi;
+    if (dist) {
+      // The walk's figures from every rank (each followed its own walkers), and the costs per rank: the slowest
+      // rank's is the crowd's.
+      const auto largest = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
+      const auto total = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); };
+      g.foot_slide_mm_max = largest(dist->all_gather(g.foot_slide_mm_max));
+      g.nan_count = static_cast<std::uint64_t>(total(dist->all_gather(static_cast<double>(g.nan_count))));
+      g.ik_unreachable = static_cast<std::uint64_t>(total(dist->all_gather(static_cast<double>(g.ik_unreachable))));
+      const std::vector<double> avoidance_per_rank = dist->all_gather(avoidance_mean);
+      const std::vector<double> navigation_per_rank = dist->all_gather(navigation_mean);
+      avoidance_mean = largest(avoidance_per_rank);
+      navigation_mean = largest(navigation_per_rank);
+      mpi = dist->summary(done);
+      if (root) {
+        mpi["avoidance_ms_mean_per_rank"] = avoidance_per_rank;
+        mpi["navigation_ms_mean_per_rank"] = navigation_per_rank;
+      }
+      if (!root) return interrupted() ? interrupted_exit_code() : kExitOk;
+    }
     const std::uint64_t nans = r.nan_count + g.nan_count;
     const bool ok = r.overlaps == 0 && r.reached_goal_pct >= 100.0 && r.stuck_agents == 0 &&
                     g.foot_slide_mm_max < 1.0 && nans == 0;
@@ -129,6 +200,7 @@ int run_crowd_report(const CrowdReportOptions& o) {
     for (const SystemStats& s : profiler.stats())
       systems.push_back({{"name", s.name}, {"mean_ms", s.mean_ms}, {"p95_ms", s.p95_ms}});
     j["systems"] = systems;
+    if (dist) j["mpi"] = mpi;
     if (!o.json.empty()) write_json_file(o.json, j);
     std::printf("crowd report: scenario %s, %zu agents, %zu frames (%.1f s at %.0f fps)\n", scenario.name.c_str(),
                 r.agents, r.frames, r.seconds, static_cast<double>(o.fps));
@@ -150,6 +222,11 @@ int run_crowd_report(const CrowdReportOptions& o) {
       return interrupted_exit_code();
     }
   } catch (const std::exception& e) {
+    if (dist) {
+      std::fprintf(stderr, "strata report crowd: rank %d: %s; stopping every rank\n", dist->rank(), error_text(e).c_str());
+      std::fflush(stderr);
+      dist->abort(kExitFailure);
+    }
     print_error("report crowd", error_text(e));
     return kExitFailure;
   }
@@ -170,6 +247,7 @@ void add_crowd_report(CLI::App& report, int& exit_code) {
   cmd->add_option("--fps", o->fps, "Simulation steps per second")->capture_default_str()->check(positive_up_to(1000));
   cmd->add_option("--json", o->json, "Write the report here");
   cmd->add_flag("--whole-duration", o->keep_going, "Run the whole duration even when every agent has arrived");
+  add_mpi_options(*cmd, o->rebalance_seconds, o->mpi_timeout_seconds);
   cmd->add_flag("--skinned", o->body, "Skin the bodies too (at --level, auto meaning 0; --body picks which); by default walkers have no body");
   cmd->callback([o, &exit_code] { exit_code = run_crowd_report(*o); });
 }

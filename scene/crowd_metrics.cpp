@@ -9,39 +9,55 @@
 
 namespace strata {
 
+void collect_agent_observations(const Crowd& crowd, std::vector<AgentObservation>& out) {
+  if (!crowd.agents) return;
+  for (std::size_t s = 0; s < kDetailSlots; ++s) {
+    const SoaTable& t = crowd.world.table(crowd.tables[s]);
+    for (std::uint32_t row = 0; row < t.size(); ++row) {
+      AgentObservation o;
+      o.walker = t.owner(row).index;
+      for (std::uint32_t c = 0; c < kAgentFloats; ++c) o.nonfinite += !std::isfinite(t.f32(kWalkerAgent, c)[row]);
+      o.x = t.f32(kWalkerAgent, kAgentPx)[row];
+      o.z = t.f32(kWalkerAgent, kAgentPz)[row];
+      o.radius = t.f32(kWalkerAgent, kAgentRadius)[row];
+      o.since_progress = t.f32(kWalkerAgent, kAgentSinceProgress)[row];
+      o.arrived = (t.u32(kWalkerAgentState, kAgentFlags)[row] & kAgentArrived) != 0u ? 1u : 0u;
+      out.push_back(o);
+    }
+  }
+}
+
 void CrowdMetrics::observe(const Crowd& crowd, float dt) {
   if (!crowd.agents) return;
+  observed_.clear();
+  collect_agent_observations(crowd, observed_);
+  observe(observed_, dt);
+}
+
+void CrowdMetrics::observe(std::span<const AgentObservation> agents, float dt) {
   ++report_.frames;
   report_.seconds += dt;
   x_.clear();
   z_.clear();
   r_.clear();
   float max_radius = 0.0f;
-  for (std::size_t s = 0; s < kDetailSlots; ++s) {
-    const SoaTable& t = crowd.world.table(crowd.tables[s]);
-    for (std::uint32_t row = 0; row < t.size(); ++row) {
-      const std::uint32_t id = t.owner(row).index;
-      if (id >= tracks_.size()) tracks_.resize(id + 1);
-      AgentTrack& track = tracks_[id];
-      track.seen = true;
-      for (std::uint32_t c = 0; c < kAgentFloats; ++c)
-        if (!std::isfinite(t.f32(kWalkerAgent, c)[row])) ++report_.nan_count;
-      const float x = t.f32(kWalkerAgent, kAgentPx)[row], z = t.f32(kWalkerAgent, kAgentPz)[row];
-      const float r = t.f32(kWalkerAgent, kAgentRadius)[row];
-      const bool arrived = (t.u32(kWalkerAgentState, kAgentFlags)[row] & kAgentArrived) != 0u;
-      if (arrived && !track.arrived) {
-        track.arrived = true;
-        // Seconds since the run began: every agent's first goal is set when it spawns, and an agent with cycling
-        // goals gets its next one (and a fresh travel clock) in the very step it arrives.
-        track.time_to_goal = static_cast<float>(report_.seconds);
-      }
-      if (!track.arrived && t.f32(kWalkerAgent, kAgentSinceProgress)[row] >= stuck_seconds_) track.stuck = true;
-      if (!std::isfinite(x) || !std::isfinite(z)) continue;
-      x_.push_back(x);
-      z_.push_back(z);
-      r_.push_back(r);
-      max_radius = std::max(max_radius, r);
+  for (const AgentObservation& o : agents) {
+    if (o.walker >= tracks_.size()) tracks_.resize(o.walker + 1);
+    AgentTrack& track = tracks_[o.walker];
+    track.seen = true;
+    report_.nan_count += o.nonfinite;
+    if (o.arrived != 0u && !track.arrived) {
+      track.arrived = true;
+      // Seconds since the run began: every agent's first goal is set when it spawns, and an agent with cycling
+      // goals gets its next one (and a fresh travel clock) in the very step it arrives.
+      track.time_to_goal = static_cast<float>(report_.seconds);
     }
+    if (!track.arrived && o.since_progress >= stuck_seconds_) track.stuck = true;
+    if (!std::isfinite(o.x) || !std::isfinite(o.z)) continue;
+    x_.push_back(o.x);
+    z_.push_back(o.z);
+    r_.push_back(o.radius);
+    max_radius = std::max(max_radius, o.radius);
   }
   // Pairs within reach: a uniform grid of cells one body wide, each agent tested against the cells around it.
   const std::size_t n = x_.size();
@@ -83,7 +99,9 @@ void CrowdMetrics::observe(const Crowd& crowd, float dt) {
           const std::uint32_t j = cell_items_[k];
           if (j <= i) continue;
           const double d = std::hypot(static_cast<double>(x_[i]) - x_[j], static_cast<double>(z_[i]) - z_[j]);
-          const double clearance = d - r_[i] - r_[j];
+          // The radii summed first (exactly, in double), so the clearance of a pair does not depend on which of
+          // the two came first: the figures are the same whatever order the agents were observed in.
+          const double clearance = d - (static_cast<double>(r_[i]) + static_cast<double>(r_[j]));
           if (!any_clearance_ || clearance < report_.min_clearance_m) report_.min_clearance_m = clearance;
           any_clearance_ = true;
           if (clearance < -tolerance_) ++report_.overlaps;

@@ -55,16 +55,27 @@ GaitMetrics::GaitMetrics(const Skeleton& skeleton, const LocomotionRig& rig, con
   report_.cadence_max = 0;
 }
 
-void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline>& paths, float dt) {
+void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline>& paths, float dt,
+                          std::span<const std::uint32_t> walker_ids) {
   const std::size_t s = l.stride;
-  if (walkers_.size() != l.count) walkers_.assign(l.count, WalkerTrack{});
+  const bool by_id = !walker_ids.empty();
+  if (by_id && walker_ids.size() != l.count)
+    throw std::invalid_argument("GaitMetrics::observe: " + std::to_string(walker_ids.size()) + " walker ids for " +
+                                std::to_string(l.count) + " rows");
+  if (!by_id && walkers_.size() != l.count) walkers_.assign(l.count, WalkerTrack{});
   report_.walkers = l.count;
   ++report_.frames;
   report_.seconds += dt;
   const std::size_t joints = skeleton_.joint_count();
 
   for (std::size_t w = 0; w < l.count; ++w) {
-    WalkerTrack& track = walkers_[w];
+    const std::size_t id = by_id ? walker_ids[w] : w;
+    if (id >= walkers_.size()) walkers_.resize(id + 1);
+    WalkerTrack& track = walkers_[id];
+    // A walker seen for the first time, or again after an absence, has no references to measure against yet.
+    if (track.last_frame + 1 != report_.frames) track = WalkerTrack{};
+    const bool fresh = track.last_frame == 0;  // this walker's first frame: no footprint to measure from
+    track.last_frame = report_.frames;
     // Non-finite values anywhere a system wrote.
     for (std::size_t c = 0; c < joints * 4; ++c) report_.nan_count += !std::isfinite(l.local_rotation[c * s + w]);
     for (std::size_t c = 0; c < joints * kAffineFloats; ++c) {
@@ -125,10 +136,10 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
       const glm::vec3 tip = world_point(l, w, rig_.ball[leg], rig_.tip_rest[leg], skeleton_.centers[rig_.ball[leg]]);
       t.cadence_sum += cadence;
       ++t.cadence_samples;
-      if (!swinging && (t.swinging || first_)) {
+      if (!swinging && (t.swinging || fresh)) {
         // Heel strike (or the first frame, already in stance): this footprint starts here.
         const float plant = l.gait[(base + kLegPlantDistance) * s + w];
-        if (t.seen_strike && !first_) {
+        if (t.seen_strike && !fresh) {
           float measured = plant - t.plant_distance;
           if (path && path->closed()) measured -= path->length() * std::floor(measured / path->length());
           const double mean_cadence = t.cadence_sum / std::max<std::uint32_t>(t.cadence_samples, 1);
@@ -138,7 +149,7 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
           stride_sum_ += measured;
           ++report_.strides;
         }
-        t.seen_strike = !first_;
+        t.seen_strike = !fresh;
         t.plant_distance = l.gait[(base + kLegPlantDistance) * s + w];
         t.cadence_sum = 0;
         t.cadence_samples = 0;
@@ -155,7 +166,7 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
         if (sigma > 0.2f && sigma < 0.8f)
           report_.swing_clearance_min_mm = std::min(report_.swing_clearance_min_mm, 1000.0 * std::min(tip.y, heel.y));
       }
-      if (!swinging && !first_) {
+      if (!swinging && !fresh) {
         // Each contact point is still while it carries the foot: the heel through the heel rocker (heel strike to
         // foot flat), the ankle while the foot is flat, the ball until it lifts as the foot rolls onto the toe tip,
         // the toe tip to toe-off. References are taken where each phase starts. Flat and ball-down are read off
@@ -187,7 +198,6 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
       t.swinging = swinging;
     }
   }
-  first_ = false;
 }
 
 GaitReport GaitMetrics::report() const {
@@ -196,8 +206,10 @@ GaitReport GaitMetrics::report() const {
                                   r.foot_slide_tip_mm_max});
   r.stride_length_mean_m = r.strides ? stride_sum_ / static_cast<double>(r.strides) : 0.0;
   double bob = 0;
-  for (const WalkerTrack& t : walkers_) bob += 100.0 * (t.root_max - t.root_min);
-  r.pelvis_bob_cm_mean = walkers_.empty() ? 0.0 : bob / static_cast<double>(walkers_.size());
+  std::size_t seen = 0;
+  for (const WalkerTrack& t : walkers_)
+    if (t.last_frame > 0) bob += 100.0 * (t.root_max - t.root_min), ++seen;
+  r.pelvis_bob_cm_mean = seen == 0 ? 0.0 : bob / static_cast<double>(seen);
   if (r.cadence_min > r.cadence_max) r.cadence_min = r.cadence_max = 0;
   if (r.swing_clearance_min_mm > 1e8) r.swing_clearance_min_mm = 0;
   return r;

@@ -3,6 +3,7 @@
 // during stance, IK accuracy, joint-limit violations, non-finite values, stride length against the gait formula,
 // pelvis bob. `strata report gait` and the locomotion tests read it.
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "components/skeleton.h"
@@ -39,8 +40,12 @@ struct GaitReport {
 class GaitMetrics {
  public:
   GaitMetrics(const Skeleton& skeleton, const LocomotionRig& rig, const GaitStyle& style);
-  // Call once per frame after FK with the lanes the frame script just wrote.
-  void observe(const WalkerLanes& lanes, const std::vector<CardinalSpline>& paths, float dt);
+  // Call once per frame after FK with the lanes the frame script just wrote. Tracks follow lane rows, or, given
+  // `walker_ids` (one per row, e.g. entity indices), walkers: for a table whose rows change between frames
+  // (walkers arriving from another process). A walker absent from the previous call starts afresh, as every
+  // walker does on the first: its strides and contacts are measured from its next heel strike.
+  void observe(const WalkerLanes& lanes, const std::vector<CardinalSpline>& paths, float dt,
+               std::span<const std::uint32_t> walker_ids = {});
   GaitReport report() const;
 
  private:
@@ -67,6 +72,7 @@ class GaitMetrics {
   struct WalkerTrack {
     LegTrack legs[2];
     float root_min = 1e9f, root_max = -1e9f;
+    std::size_t last_frame = 0;  // report_.frames of the last call that saw it; 0: never seen
   };
   const Skeleton& skeleton_;
   const LocomotionRig& rig_;
@@ -74,7 +80,6 @@ class GaitMetrics {
   std::vector<WalkerTrack> walkers_;
   GaitReport report_;
   double stride_sum_ = 0;
-  bool first_ = true;
 };
 
 // One walker's joint-angle curves over a normalised gait cycle (0 = its left heel strike, the walk's phase 0),

@@ -119,6 +119,23 @@ TEST(MpiCrowd, SteeredAgentsGiveOneProcesssState) {
   EXPECT_EQ(walkers, 48.0);
   EXPECT_GT(ghosts, 0.0) << "agents met across borders, so the hash tested the ghosts";
   for (const auto& b : m.at("plan_offer_bytes_per_frame_per_rank")) EXPECT_GT(b.get<double>(), 0.0);
+
+  // `strata report crowd` over the same ranks: rank 0 observes every agent, so the crowd's figures (overlaps
+  // across borders included) are one process's; only the costs are per rank.
+  const std::string report = "report crowd --scenario crossing --walkers 48 --seconds 4 --json ";
+  const CliResult alone = test::run_strata(report + (tmp / "one.json").string());
+  ASSERT_EQ(alone.status, 0) << alone.out;
+  const CliResult spread = mpirun(3, report + (tmp / "np3.json").string());
+  ASSERT_EQ(spread.status, 0) << spread.out;
+  EXPECT_EQ(spread.out.find("crowd report:"), spread.out.rfind("crowd report:")) << "printed once: " << spread.out;
+  const nlohmann::json a = nlohmann::json::parse(std::ifstream(tmp / "one.json"));
+  const nlohmann::json b = nlohmann::json::parse(std::ifstream(tmp / "np3.json"));
+  for (const char* key : {"agents", "frames", "overlaps", "min_clearance_m", "reached_goal_pct", "time_to_goal_s",
+                          "stuck_agents", "nan_count"})
+    EXPECT_EQ(b.at(key), a.at(key)) << key;
+  EXPECT_EQ(b.at("mpi").at("ranks"), 3);
+  EXPECT_LT(b.at("foot_slide_mm_max").get<double>(), a.at("foot_slide_mm_max").get<double>() + 0.5)
+      << "each rank follows its walkers' feet; a walker arriving from another rank starts at its next heel strike";
 }
 
 TEST(MpiCrowd, BenchTimesEveryRanksSlabAndOtherCommandsAreRefusedOnce) {
@@ -135,11 +152,11 @@ TEST(MpiCrowd, BenchTimesEveryRanksSlabAndOtherCommandsAreRefusedOnce) {
   EXPECT_EQ(walkers, 10.0);
   for (const auto& ms : m.at("compute_ms_mean_per_rank")) EXPECT_GT(ms.get<double>(), 0.0);
   // One line, exit 2, for a command that would run whole in every rank.
-  const CliResult refused = mpirun(2, "report crowd --json " + (tmp / "crowd.json").string());
+  const CliResult refused = mpirun(2, "report gait --json " + (tmp / "gait.json").string());
   EXPECT_EQ(refused.status, 2) << refused.out;
-  EXPECT_EQ(refused.out.find("strata report crowd:"), refused.out.rfind("strata report crowd:")) << refused.out;
+  EXPECT_EQ(refused.out.find("strata report gait:"), refused.out.rfind("strata report gait:")) << refused.out;
   EXPECT_NE(refused.out.find("under mpirun"), std::string::npos) << refused.out;
-  EXPECT_FALSE(fs::exists(tmp / "crowd.json"));
+  EXPECT_FALSE(fs::exists(tmp / "gait.json"));
 }
 
 TEST(MpiCrowd, ABadInputIsReportedOnceByRankZero) {
