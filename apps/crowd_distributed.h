@@ -1,12 +1,12 @@
 #pragma once
 // What `strata crowd` (and `strata bench` and `strata report crowd`, for the simulation) does differently when
-// started by mpirun
-// (docs/scale-out.md): one crowd over K processes.
+// started by mpirun (docs/scale-out.md): one crowd over K processes.
 //
-//   every rank   builds the same crowd from the same inputs and seed, and advances every walker's gait clock
-//                (a few ns a walker); owns the walkers in its slab of ground (dist/partition.h, recut by walker
-//                density every --rebalance-seconds), and only for those runs IK, FK, muscles, skinning and
-//                drawing (systems/ownership.h); renders them over the shared ground into colour + depth
+//   every rank   builds the same crowd from the same inputs and seed, then holds only the walkers in its slab of
+//                ground (dist/partition.h, recut by walker density every --rebalance-seconds; the rest are
+//                handles in the crowd's remote table, dist/migration.h) and runs the whole frame for those: a
+//                scenario's agents with the other ranks' agents near its slab as ghosts (dist/agent_exchange.h),
+//                IK, FK, muscles, skinning, drawing; renders them over the shared ground into colour + depth
 //   compositing  each frame's pieces folded by depth (dist/composite.h) onto rank 0 (dist/mpi_world.h)
 //   rank 0       writes the frames, the video, summary.json (with an "mpi" object: ranks, walkers per rank, load
 //                imbalance, bytes sent per frame, compositing time) and one Chrome trace with a process per rank

@@ -51,9 +51,10 @@ function(strata_layer name type)
   strata_unity_batches(strata_${name})
 endfunction()
 
-# STRATA_UNITY_BUILD (CMakeLists.txt says why): the target's files compiled in batches of 8.
+# STRATA_UNITY_BUILD (CMakeLists.txt says why): the target's files compiled in batches of STRATA_UNITY_BATCH_SIZE.
+set(STRATA_UNITY_BATCH_SIZE 8 CACHE STRING "Files per unity batch (0: one batch per target, which checks that helper names are unique)")
 function(strata_unity_batches target)
   if(STRATA_UNITY_BUILD)
-    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 8)
+    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE ${STRATA_UNITY_BATCH_SIZE})
   endif()
 endfunction()

@@ -33,6 +33,7 @@ add_library(strata_fuzz_loaders STATIC
   rig/muscle_binding.cpp
   ${STRATA_EMBED_CPP})
 target_include_directories(strata_fuzz_loaders PUBLIC ${CMAKE_CURRENT_SOURCE_DIR})
+strata_unity_batches(strata_fuzz_loaders)
 target_compile_options(strata_fuzz_loaders PUBLIC ${STRATA_FUZZ_FLAGS} PRIVATE -fsanitize=fuzzer-no-link ${STRATA_WARNINGS})
 target_link_options(strata_fuzz_loaders PUBLIC -fsanitize=address,undefined)
 target_link_libraries(strata_fuzz_loaders

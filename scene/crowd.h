@@ -127,7 +127,8 @@ struct CrowdLod {
   std::vector<Candidate> candidates;
   std::vector<Entity> restarted;  // scratch: walkers that left a light table this frame (their walk restarts)
   // One crowd spread over several processes (dist/): the slab of ground whose walkers this process animates,
-  // skins and draws; the others are kept culled (systems/ownership.h). None: every walker is this process's.
+  // skins and draws; a held walker outside it (one nobody owns) is culled (systems/ownership.h). None: every
+  // walker is this process's.
   std::optional<OwnershipRegion> ownership;
 };
 

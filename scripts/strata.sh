@@ -122,7 +122,7 @@ fuzz() {
   # in 10 s; long fuzzing sessions keep -O1.
   local opt="${FUZZ_OPT:--O1}"
   CXX=clang++-14 cmake -S "$ROOT" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="$opt -DNDEBUG" \
-      -DSTRATA_FUZZ=ON \
+      -DSTRATA_FUZZ=ON -DSTRATA_UNITY_BUILD=ON \
       -DSTRATA_BUILD_TESTS=OFF -DSTRATA_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build "$dir" -j "$JOBS" --target strata_fuzz_all
   bash "$ROOT/fuzz/build_corpus.sh" "$dir/corpus" >/dev/null
