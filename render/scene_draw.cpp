@@ -203,14 +203,6 @@ bool frame_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderSc
   return any;
 }
 
-bool finite_point_bounds(std::span<const glm::vec3> points, glm::vec3& lo, glm::vec3& hi) {
-  lo = glm::vec3(std::numeric_limits<float>::max());
-  hi = glm::vec3(std::numeric_limits<float>::lowest());
-  for (const glm::vec3& p : points)
-    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
-  return lo.x <= hi.x;
-}
-
 std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
                          int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options) {
   const std::size_t with_joints = gather_crowd_joints(crowd, scratch.joints);
@@ -249,13 +241,13 @@ std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamer
     // process that box.
     const std::size_t joints = with_joints * crowd.rig().skeleton.joint_count();
     glm::vec3 lo, hi, feet_lo, feet_hi;
-    finite_point_bounds(std::span<const glm::vec3>(scratch.joints.data(), std::min(joints, scratch.joints.size())), lo, hi);
+    joint_bounds(std::span<const glm::vec3>(scratch.joints.data(), std::min(joints, scratch.joints.size())), lo, hi);
     glm::vec3 joints_lo = lo, joints_hi = hi;
     options.share_bounds(joints_lo, joints_hi);
     scratch.shared_joints.clear();
     if (joints_lo.x <= joints_hi.x) scratch.shared_joints = {joints_lo, joints_hi};
     skeletons.shadow_fit_points = scratch.shared_joints;
-    if (impostors && finite_point_bounds(scratch.impostor_feet, feet_lo, feet_hi))
+    if (impostors && joint_bounds(scratch.impostor_feet, feet_lo, feet_hi))
       lo = glm::min(lo, feet_lo), hi = glm::max(hi, feet_hi);
     options.share_bounds(lo, hi);
     scratch.shared_ground.clear();

@@ -87,7 +87,5 @@ struct RenderFrameOptions {
 // viewport_height its pixel height), then set_crowd_camera(). Returns the body triangles drawn.
 std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamera& camera, float aspect,
                          int viewport_height, RenderScratch& scratch, const RenderFrameOptions& options = {});
-// Bounds of the joints of a render_frame's skeleton input (every finite point); false when there are none.
-bool finite_point_bounds(std::span<const glm::vec3> points, glm::vec3& lo, glm::vec3& hi);
 
 }  // namespace strata

@@ -1,6 +1,7 @@
 #include "systems/pose_gather.h"
 
 #include <cmath>
+#include <limits>
 
 #include <glm/common.hpp>
 
@@ -19,14 +20,12 @@ void gather_joint_positions(const WalkerLanes& lanes, std::vector<glm::vec3>& ou
   }
 }
 
-bool joint_bounds(const std::vector<glm::vec3>& positions, glm::vec3& lo, glm::vec3& hi) {
-  if (positions.empty()) return false;
-  lo = hi = positions.front();
-  for (const glm::vec3& p : positions) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
-  return true;
+bool joint_bounds(std::span<const glm::vec3> positions, glm::vec3& lo, glm::vec3& hi) {
+  lo = glm::vec3(std::numeric_limits<float>::max());
+  hi = glm::vec3(std::numeric_limits<float>::lowest());
+  for (const glm::vec3& p : positions)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  return lo.x <= hi.x;
 }
 
 }  // namespace strata
