@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -187,17 +188,27 @@ void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
   if (!known) d.walkers = walkers;
   if (!known || time_s + 1e-9 >= d.next_cut_s || d.partition.ranks() != ranks()) {
     std::vector<float> xs, zs;
-    const std::vector<std::uint8_t> mine = pack_placements(crowd);
+    unpack_placements(pack_placements(crowd), xs, zs);
     if (known && ranks() > 1) {
-      // Every rank's held walkers' placements to every rank (12 bytes a walker, once a rebalance period).
-      const std::vector<std::vector<std::uint8_t>> to_all(static_cast<std::size_t>(ranks()), mine);
-      const std::vector<std::uint8_t> all = d.world.exchange(to_all);
-      d.recut_bytes += mine.size() * static_cast<std::size_t>(ranks() - 1);
-      unpack_placements(all, xs, zs);
+      // Each rank holds its own walkers: the slabs are cut from the sum of every rank's histogram of placements
+      // over the box of all of them (dist/partition.h), bytes independent of the crowd's size.
+      float lo[2] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
+      float hi[2] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest()};
+      for (std::size_t i = 0; i < xs.size(); ++i) {
+        if (!std::isfinite(xs[i]) || !std::isfinite(zs[i])) continue;
+        lo[0] = std::min(lo[0], xs[i]), hi[0] = std::max(hi[0], xs[i]);
+        lo[1] = std::min(lo[1], zs[i]), hi[1] = std::max(hi[1], zs[i]);
+      }
+      d.world.min_max(lo, hi);
+      PlacementHistogram h = placement_histogram(xs, zs, lo[0], hi[0], lo[1], hi[1]);
+      d.world.sum(h.x);
+      d.world.sum(h.z);
+      d.recut_bytes += 4 * sizeof(float) + (h.x.size() + h.z.size()) * sizeof(std::uint32_t);
+      d.partition = partition_from_histogram(h, ranks());
     } else {
-      unpack_placements(mine, xs, zs);
+      // A crowd every rank holds whole (the start): the exact cut from every placement.
+      d.partition = partition_by_density(xs, zs, ranks());
     }
-    d.partition = partition_by_density(xs, zs, ranks());
     d.next_cut_s = time_s + d.rebalance_s;
     ++d.recuts;
   }

@@ -70,6 +70,12 @@ void MpiWorld::min_max(std::span<float> lo, std::span<float> hi) {
   bytes_sent_ += 2 * lo.size() * sizeof(float);
 }
 
+void MpiWorld::sum(std::span<std::uint32_t> values) {
+  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), as_count(values.size(), "sum"), MPI_UINT32_T, MPI_SUM, MPI_COMM_WORLD),
+        "MPI_Allreduce");
+  bytes_sent_ += values.size() * sizeof(std::uint32_t);
+}
+
 std::vector<double> MpiWorld::all_gather(double value) {
   std::vector<double> all(static_cast<std::size_t>(size_));
   check(MPI_Allgather(&value, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD), "MPI_Allgather");

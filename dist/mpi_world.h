@@ -39,6 +39,8 @@ class MpiWorld {
   bool all_ok(bool ok);
   // Element-wise: lo becomes the minimum over ranks, hi the maximum.
   void min_max(std::span<float> lo, std::span<float> hi);
+  // Element-wise sum over ranks, in place.
+  void sum(std::span<std::uint32_t> values);
   // The values of every rank, in rank order, on every rank.
   std::vector<double> all_gather(double value);
   // Rank 0 receives every rank's bytes concatenated in rank order and each rank's size; the others get empties.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace strata {
 
@@ -51,6 +52,54 @@ CrowdPartition partition_by_density(std::span<const float> xs, std::span<const f
     else if (at >= n) cut = std::nextafter(c.back(), std::numeric_limits<float>::infinity());
     else cut = 0.5f * (c[at - 1] + c[at]);
     // Cuts never decrease (several quantiles may fall between the same two walkers).
+    p.cuts[static_cast<std::size_t>(k - 1)] = k > 1 ? std::max(cut, p.cuts[static_cast<std::size_t>(k - 2)]) : cut;
+  }
+  return p;
+}
+
+namespace {
+
+std::size_t bin_of(float c, float lo, float hi) {
+  if (!(hi > lo)) return 0;
+  const double f = (static_cast<double>(c) - lo) / (static_cast<double>(hi) - lo);
+  return std::min(kPartitionBins - 1, static_cast<std::size_t>(std::max(0.0, f * static_cast<double>(kPartitionBins))));
+}
+
+}  // namespace
+
+PlacementHistogram placement_histogram(std::span<const float> xs, std::span<const float> zs, float lo_x, float hi_x,
+                                       float lo_z, float hi_z) {
+  if (xs.size() != zs.size()) throw std::invalid_argument("placement_histogram: xs and zs differ in size");
+  PlacementHistogram h{lo_x, hi_x, lo_z, hi_z, std::vector<std::uint32_t>(kPartitionBins, 0),
+                       std::vector<std::uint32_t>(kPartitionBins, 0)};
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    if (!std::isfinite(xs[i]) || !std::isfinite(zs[i])) continue;
+    ++h.x[bin_of(xs[i], lo_x, hi_x)];
+    ++h.z[bin_of(zs[i], lo_z, hi_z)];
+  }
+  return h;
+}
+
+CrowdPartition partition_from_histogram(const PlacementHistogram& h, int ranks) {
+  if (ranks < 1) throw std::invalid_argument("partition_from_histogram: ranks must be at least 1");
+  if (h.x.size() != kPartitionBins || h.z.size() != kPartitionBins)
+    throw std::invalid_argument("partition_from_histogram: a histogram of " + std::to_string(kPartitionBins) + " bins an axis");
+  CrowdPartition p;
+  p.cuts.assign(static_cast<std::size_t>(ranks - 1), 0.0f);
+  p.axis = h.hi_z - h.lo_z > h.hi_x - h.lo_x ? 2 : 0;
+  const std::vector<std::uint32_t>& bins = p.axis == 0 ? h.x : h.z;
+  const double lo = p.axis == 0 ? h.lo_x : h.lo_z, hi = p.axis == 0 ? h.hi_x : h.hi_z;
+  const double width = (hi - lo) / static_cast<double>(kPartitionBins);
+  std::uint64_t n = 0;
+  for (const std::uint32_t c : bins) n += c;
+  if (n == 0) return p;
+  std::size_t bin = 0;
+  std::uint64_t below = 0;  // walkers in the bins before `bin`
+  for (int k = 1; k < ranks; ++k) {
+    const double want = static_cast<double>(n) * k / ranks;
+    while (bin + 1 < kPartitionBins && static_cast<double>(below + bins[bin]) < want) below += bins[bin++];
+    const double inside = bins[bin] > 0 ? (want - static_cast<double>(below)) / bins[bin] : 0.0;
+    const auto cut = static_cast<float>(lo + width * (static_cast<double>(bin) + std::clamp(inside, 0.0, 1.0)));
     p.cuts[static_cast<std::size_t>(k - 1)] = k > 1 ? std::max(cut, p.cuts[static_cast<std::size_t>(k - 2)]) : cut;
   }
   return p;

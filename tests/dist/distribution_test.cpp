@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <random>
@@ -72,6 +73,37 @@ TEST(Partition, DependsOnThePositionsNotTheirOrderAndIgnoresNonFinite) {
   EXPECT_EQ(empty.ranks(), 4);
   EXPECT_GE(empty.owner(12.0f, -3.0f), 0);
   EXPECT_THROW(partition_by_density(xs, zs, 0), std::invalid_argument);
+}
+
+TEST(Partition, HistogramCutsAreTheSameForAnySplitOfTheWalkersAndBalanceToABin) {
+  std::mt19937 rng(11);
+  std::normal_distribution<float> along(0.0f, 30.0f);
+  std::uniform_real_distribution<float> across(-10.0f, 10.0f);
+  std::vector<float> xs, zs;
+  for (int i = 0; i < 20000; ++i) xs.push_back(along(rng)), zs.push_back(across(rng));
+  xs.push_back(std::numeric_limits<float>::quiet_NaN()), zs.push_back(0.0f);  // ignored
+  const float lo_x = *std::min_element(xs.begin(), xs.end() - 1), hi_x = *std::max_element(xs.begin(), xs.end() - 1);
+  const PlacementHistogram whole = placement_histogram(xs, zs, lo_x, hi_x, -10.0f, 10.0f);
+  // Three processes holding interleaved thirds, their histograms summed as MpiWorld::sum does.
+  PlacementHistogram sum = placement_histogram({}, {}, lo_x, hi_x, -10.0f, 10.0f);
+  for (int part = 0; part < 3; ++part) {
+    std::vector<float> px, pz;
+    for (std::size_t i = static_cast<std::size_t>(part); i < xs.size(); i += 3) px.push_back(xs[i]), pz.push_back(zs[i]);
+    const PlacementHistogram h = placement_histogram(px, pz, lo_x, hi_x, -10.0f, 10.0f);
+    for (std::size_t b = 0; b < kPartitionBins; ++b) sum.x[b] += h.x[b], sum.z[b] += h.z[b];
+  }
+  EXPECT_EQ(sum.x, whole.x);
+  const CrowdPartition p = partition_from_histogram(sum, 4);
+  EXPECT_EQ(p.axis, 0);
+  ASSERT_EQ(p.cuts.size(), 3u);
+  EXPECT_TRUE(std::is_sorted(p.cuts.begin(), p.cuts.end()));
+  const std::uint32_t fullest = *std::max_element(whole.x.begin(), whole.x.end());
+  for (const std::size_t n : walkers_per_rank(p, xs, zs))
+    EXPECT_NEAR(static_cast<double>(n), 5000.0, static_cast<double>(fullest) + 1.0) << "balanced to within a bin";
+  // Against the exact cuts from every placement: within one bin's width.
+  const CrowdPartition exact = partition_by_density(xs, zs, 4);
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(p.cuts[k], exact.cuts[k], (hi_x - lo_x) / kPartitionBins);
+  EXPECT_THROW(partition_from_histogram(PlacementHistogram{}, 2), std::invalid_argument);
 }
 
 TEST(Composite, NearestWinsTiesKeepTheDarkerAndOrderDoesNotMatter) {
@@ -276,9 +308,28 @@ TEST(AgentExchange, SteeredAgentsOverRanksMatchOneCrowd) {
         Profiler profiler(4, false);
         for (int f = 0; f < kFrames; ++f) {
           if (f % 30 == 0) {
+            // As apps/crowd_distributed.cpp: the exact cut at the start, where every rank holds every walker; then
+            // every rank's histogram over a common box, summed.
             std::vector<float> xs, zs;
-            unpack_placements(f == 0 ? pack_placements(crowd) : hub.all_gather(r, pack_placements(crowd)), xs, zs);
-            partition = partition_by_density(xs, zs, kRanks);
+            unpack_placements(pack_placements(crowd), xs, zs);
+            if (f == 0) {
+              partition = partition_by_density(xs, zs, kRanks);
+            } else {
+              const PlacementHistogram mine = placement_histogram(xs, zs, -60.0f, 60.0f, -60.0f, 60.0f);
+              std::vector<std::uint8_t> bytes(2 * kPartitionBins * 4);
+              std::memcpy(bytes.data(), mine.x.data(), kPartitionBins * 4);
+              std::memcpy(bytes.data() + kPartitionBins * 4, mine.z.data(), kPartitionBins * 4);
+              const std::vector<std::uint8_t> all = hub.all_gather(r, bytes);
+              PlacementHistogram sum = placement_histogram({}, {}, -60.0f, 60.0f, -60.0f, 60.0f);
+              for (std::size_t at = 0; at < all.size(); at += bytes.size())
+                for (std::size_t b = 0; b < kPartitionBins; ++b) {
+                  std::uint32_t cx, cz;
+                  std::memcpy(&cx, all.data() + at + 4 * b, 4);
+                  std::memcpy(&cz, all.data() + at + 4 * (kPartitionBins + b), 4);
+                  sum.x[b] += cx, sum.z[b] += cz;
+                }
+              partition = partition_from_histogram(sum, kRanks);
+            }
           }
           if (f == 0) {
             keep_owned(crowd, partition, r);
