@@ -221,8 +221,8 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
   }
   // Spread over processes: the other processes' agents near this one's join in entity order (merged with this
   // process's, which win a tie: a walker nobody owns is kept by every process), so each of this process's agents
-  // sees the neighbours, in the order, that one process would give it. Rows past `a.rows` are ghosts: solved,
-  // never written back.
+  // sees the neighbours, in the order, that one process would give it. Inputs whose `a.order` is kGhostRow are
+  // ghosts: solved (their answers feed the second pass), never written back.
   a.ghosts.clear();
   if (a.exchange) {
     a.exchange->exchange_ghosts(a.mine, a.ghosts);

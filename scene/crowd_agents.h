@@ -10,7 +10,9 @@
 //
 // Avoidance sees every agent whatever table its walker sits in (meshes, impostors, culled): the stage gathers the
 // agents' columns into arrays ordered by entity index, so the result depends on the seed and never on tables or
-// threads, and scatters the velocities back.
+// threads, and scatters the velocities back. A crowd spread over processes (dist/) steers only the agents this
+// process holds; `CrowdAgents::exchange` brings in the others near them for avoidance (ghosts) and shares the
+// planning budget, so each agent's answer is the one a single process gives.
 #include <cstdint>
 #include <memory>
 #include <span>
