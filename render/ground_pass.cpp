@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/geometric.hpp>
 #include <glm/common.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
@@ -21,7 +22,10 @@ GroundExtent ground_extent(std::span<const glm::vec3> points) {
   if (lo.x > hi.x) return {};
   GroundExtent e;
   e.center = 0.5f * (lo + hi);
-  e.half_size = std::max(0.5f * std::max(hi.x - lo.x, hi.y - lo.y) + 15.0f, 25.0f);
+  // The farthest point from the centre is a corner of the box.
+  const float reach = 0.5f * glm::length(hi - lo);
+  e.half_size = std::max({0.5f * std::max(hi.x - lo.x, hi.y - lo.y) + 15.0f, reach + std::max(15.0f, 0.4f * reach), 25.0f});
+  e.fade_start = std::max(0.6f * e.half_size, reach + 2.0f);
   return e;
 }
 
@@ -41,6 +45,7 @@ void GroundPass::draw(std::span<const glm::vec3> joints, const glm::mat4& view, 
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));
   glProgramUniform2fv(p, glGetUniformLocation(p, "u_center"), 1, glm::value_ptr(e.center));
   glProgramUniform1f(p, glGetUniformLocation(p, "u_half_size"), e.half_size);
+  glProgramUniform1f(p, glGetUniformLocation(p, "u_fade_start"), e.fade_start);
   glProgramUniform3fv(p, glGetUniformLocation(p, "u_ground_color"), 1, glm::value_ptr(ground_color));
   glProgramUniform3fv(p, glGetUniformLocation(p, "u_clear_color"), 1, glm::value_ptr(clear_color));
   glBindVertexArray(vao_.id());

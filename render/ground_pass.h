@@ -13,11 +13,15 @@
 
 namespace strata {
 
-// The square the ground covers: centred under the points (x, z) and reaching at least 15 m past the farthest of
-// them, and 25 m from the centre, in every direction; the origin +-25 m when there is no finite point.
+// The square the ground covers: centred under the points (x, z), reaching at least 25 m from the centre and past
+// the farthest point by 15 m or 40 % of its distance, whichever is more; the origin +-25 m when there is no finite
+// point. The ground fades into the clear colour from `fade_start` (m from the centre) to its edge: no nearer than
+// 2 m past the farthest point, so no walker stands on faded ground (the fade once began at 60 % of the half size,
+// and a wide crowd's outer walkers stood on ground 80 % faded, as if floating in the sky).
 struct GroundExtent {
   glm::vec2 center{0.0f};
   float half_size = 25.0f;
+  float fade_start = 15.0f;
 };
 GroundExtent ground_extent(std::span<const glm::vec3> points);
 

@@ -334,7 +334,7 @@ void RayTracer::render(const BodySource& bodies, std::span<const glm::vec3> grou
     const glm::vec3 albedo = ground_albedo * glm::mix(1.0f, 0.8f, line);
     const float visible = occluded(hit + glm::vec3(0.0f, 1e-4f, 0.0f)) ? 0.0f : 1.0f;
     const glm::vec3 c = display(light, shade(light, hit, eye, glm::vec3(0, 1, 0), albedo, 0.0f, 1.0f, visible));
-    const float fade = glm::smoothstep(0.6f * ground.half_size, ground.half_size, glm::length(p - ground.center));
+    const float fade = glm::smoothstep(ground.fade_start, ground.half_size, glm::length(p - ground.center));
     return glm::mix(c, clear, fade);
   };
   auto body_colour = [&](const TracedBatch& t, std::size_t walker, std::size_t tri, float u, float v,

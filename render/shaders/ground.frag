@@ -8,6 +8,7 @@ uniform vec3 u_ground_color;
 uniform vec3 u_clear_color;
 uniform vec2 u_center;
 uniform float u_half_size;
+uniform float u_fade_start;  // m from u_center where the fade begins (ground_pass.h GroundExtent)
 out vec4 f_color;
 const vec3 kToLight = normalize(vec3(0.35, 0.6, 0.7));
 void main() {
@@ -18,6 +19,6 @@ void main() {
   float diffuse = max(dot(normalize(mat3(u_view) * vec3(0.0, 1.0, 0.0)), kToLight), 0.0);
   vec3 c = u_ground_color * (0.55 + 0.45 * diffuse);
   c = mix(c, 0.8 * c, line);
-  float fade = smoothstep(0.6 * u_half_size, u_half_size, length(p - u_center));
+  float fade = smoothstep(u_fade_start, u_half_size, length(p - u_center));
   f_color = vec4(mix(c, u_clear_color, fade), 1.0);
 }

@@ -804,7 +804,15 @@ TEST(GroundExtent, CentresUnderThePointsAndReachesPastThem) {
   const std::vector<glm::vec3> points{{-40.0f, 1.0f, 2.0f}, {40.0f, 0.0f, 6.0f}, {nan, 0.0f, 100.0f}};
   const GroundExtent e = ground_extent(points);
   EXPECT_EQ(e.center, glm::vec2(0.0f, 4.0f));
-  EXPECT_EQ(e.half_size, 55.0f);  // half the 80 m spread plus 15 m
+  // The farthest point is a corner of the 80 x 4 m box, 40.05 m from the centre: the ground reaches 40 % further.
+  const float reach = std::sqrt(40.0f * 40.0f + 2.0f * 2.0f);
+  EXPECT_FLOAT_EQ(e.half_size, 1.4f * reach);
+  EXPECT_FLOAT_EQ(e.fade_start, reach + 2.0f) << "no point stands on faded ground";
+  EXPECT_FLOAT_EQ(empty.fade_start, 15.0f);
+  // A small crowd keeps the 25 m ground and its fade from 15 m.
+  const std::vector<glm::vec3> near{{-3.0f, 0.0f, -3.0f}, {3.0f, 0.0f, 3.0f}};
+  EXPECT_EQ(ground_extent(near).half_size, 25.0f);
+  EXPECT_FLOAT_EQ(ground_extent(near).fade_start, 15.0f);
 }
 
 // Every shader the passes load is embedded in the library (the program runs with no file beside it).
