@@ -98,8 +98,8 @@ struct CrowdDistribution::Impl {
   std::vector<Entity> walkers;       // every walker, creation order (the same on every rank)
   std::vector<std::int32_t> owner;   // their owners at the last assign_walkers: this rank, kNobody or kElsewhere
   std::size_t owned = 0;
-  // This rank's traffic over the run: walkers and bytes migrated out, placements sent for recuts, ghosts and plan
-  // offers sent and ghosts received (scene/crowd_agents.h AgentExchange).
+  // This rank's traffic over the run: walkers and bytes migrated out, placement histograms sent for recuts, ghosts
+  // and plan offers sent and ghosts received (scene/crowd_agents.h AgentExchange).
   std::size_t migrated_out = 0, migration_bytes = 0, recut_bytes = 0;
   std::size_t ghost_bytes = 0, plan_bytes = 0, ghosts_received = 0, agent_steps = 0;
   std::vector<double> compute_ms, composite_ms, depth_read_ms, wait_ms;
