@@ -4,6 +4,10 @@
 //
 // Walkers are simulated without a body (--level -1 by default): the walk, IK and FK run for every walker, so foot
 // slide is measured on every one, and skinning, which the report does not measure, would only slow it.
+//
+// Under mpirun each rank steps its slab's agents (apps/crowd_distributed.h) and rank 0 observes every agent, so
+// the crowd's figures are one process's; foot slide is followed by each rank for the walkers it holds, and the
+// costs are the slowest rank's (each rank's in "mpi").
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
