@@ -188,7 +188,7 @@ void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
   if (!known) d.walkers = walkers;
   if (!known || time_s + 1e-9 >= d.next_cut_s || d.partition.ranks() != ranks()) {
     std::vector<float> xs, zs;
-    unpack_placements(pack_placements(crowd), xs, zs);
+    held_placements(crowd, xs, zs);
     if (known && ranks() > 1) {
       // Each rank holds its own walkers: the slabs are cut from the sum of every rank's histogram of placements
       // over the box of all of them (dist/partition.h), bytes independent of the crowd's size.

@@ -113,28 +113,11 @@ std::vector<std::vector<std::uint8_t>> pack_leaving(Crowd& crowd, const CrowdPar
   return bytes;
 }
 
-std::vector<std::uint8_t> pack_placements(const Crowd& crowd) {
-  std::vector<std::uint8_t> out;
-  for_each_held(crowd, [&](Entity w, float x, float z) {
-    const std::size_t at = out.size();
-    out.resize(at + 12);
-    std::memcpy(out.data() + at, &w.index, 4);
-    std::memcpy(out.data() + at + 4, &x, 4);
-    std::memcpy(out.data() + at + 8, &z, 4);
-  });
-  return out;
-}
-
-void unpack_placements(std::span<const std::uint8_t> bytes, std::vector<float>& xs, std::vector<float>& zs) {
-  if (bytes.size() % 12 != 0)
-    throw std::runtime_error("unpack_placements: " + std::to_string(bytes.size()) + " bytes are not whole walkers");
-  for (std::size_t at = 0; at < bytes.size(); at += 12) {
-    float x, z;
-    std::memcpy(&x, bytes.data() + at + 4, 4);
-    std::memcpy(&z, bytes.data() + at + 8, 4);
+void held_placements(const Crowd& crowd, std::vector<float>& xs, std::vector<float>& zs) {
+  for_each_held(crowd, [&](Entity, float x, float z) {
     xs.push_back(x);
     zs.push_back(z);
-  }
+  });
 }
 
 }  // namespace strata

@@ -43,10 +43,8 @@ std::size_t keep_owned(Crowd& crowd, const CrowdPartition& partition, int rank);
 // move into the remote table here. `leaving` counts them.
 std::vector<std::vector<std::uint8_t>> pack_leaving(Crowd& crowd, const CrowdPartition& partition, int rank,
                                                     std::size_t& leaving);
-// The placements (x, z) of the held walkers, for a recut: 12 bytes a walker (entity index, x, z).
-std::vector<std::uint8_t> pack_placements(const Crowd& crowd);
-// Appends what pack_placements wrote (every process's, concatenated) to xs and zs. Throws std::runtime_error for
-// a length that is not whole walkers.
-void unpack_placements(std::span<const std::uint8_t> bytes, std::vector<float>& xs, std::vector<float>& zs);
+// Appends the placements (x, z) of the held walkers to xs and zs, table by table: what a recut counts
+// (dist/partition.h).
+void held_placements(const Crowd& crowd, std::vector<float>& xs, std::vector<float>& zs);
 
 }  // namespace strata

@@ -311,7 +311,7 @@ TEST(AgentExchange, SteeredAgentsOverRanksMatchOneCrowd) {
             // As apps/crowd_distributed.cpp: the exact cut at the start, where every rank holds every walker; then
             // every rank's histogram over a common box, summed.
             std::vector<float> xs, zs;
-            unpack_placements(pack_placements(crowd), xs, zs);
+            held_placements(crowd, xs, zs);
             if (f == 0) {
               partition = partition_by_density(xs, zs, kRanks);
             } else {
@@ -396,7 +396,7 @@ void expect_partitioned_crowd_matches(int ranks, int frames, int recut_frames) {
     if (f % recut_frames == 0) {
       // At the start every crowd is whole, so one crowd's placements are everyone's; later each holds its own.
       std::vector<float> xs, zs;
-      for (int r = 0; r < (f == 0 ? 1 : ranks); ++r) unpack_placements(pack_placements(*parts[static_cast<std::size_t>(r)]), xs, zs);
+      for (int r = 0; r < (f == 0 ? 1 : ranks); ++r) held_placements(*parts[static_cast<std::size_t>(r)], xs, zs);
       ASSERT_EQ(xs.size(), single->walker_count()) << "frame " << f << ": every walker held exactly once";
       partition = partition_by_density(xs, zs, ranks);
     }
