@@ -272,7 +272,9 @@ void CrowdDistribution::composite(const CrowdRenderer& renderer, std::vector<std
   d.world.barrier();
   d.wait_ms.push_back(ms_since(t));
   t = clock::now();
-  d.world.composite(pixels, d.depth, width, height, d.composited);
+  // Only the pixels this rank's walkers and their shadows can have touched travel (dist/composite.h footprints).
+  const PixelRect f = renderer.last_footprint();
+  d.world.composite(pixels, d.depth, width, height, ImageRect{f.x0, f.y0, f.x1, f.y1}, d.composited);
   if (root()) pixels.swap(d.composited);
   d.composite_ms.push_back(ms_since(t));
   d.beat();
@@ -365,6 +367,9 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   const std::vector<double> composite_bytes =
       d.world.all_gather(static_cast<double>(d.world.composite_bytes_sent()) * per_frame);
   const std::vector<double> bytes = d.world.all_gather(static_cast<double>(d.world.bytes_sent()) * per_frame);
+  const double frame_pixels = static_cast<double>(d.depth.size());
+  const std::vector<double> footprint = d.world.all_gather(
+      frame_pixels > 0 ? 100.0 * static_cast<double>(d.world.footprint_pixels()) * per_frame / frame_pixels : 0.0);
   const std::vector<double> migration = d.world.all_gather(static_cast<double>(d.migration_bytes) * per_frame);
   const std::vector<double> migrated = d.world.all_gather(static_cast<double>(d.migrated_out));
   const std::vector<double> recut = d.world.all_gather(static_cast<double>(d.recut_bytes) * per_frame);
@@ -392,7 +397,7 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   nlohmann::json j;
   j["ranks"] = ranks();
   j["hosts"] = hosts;
-  j["compositor"] = "direct-send";
+  j["compositor"] = "direct-send, footprints";
   j["partition_axis"] = d.partition.axis == 0 ? "x" : "z";
   j["partition_cuts_m"] = d.partition.cuts;
   j["rebalance_s"] = d.rebalance_s;
@@ -406,6 +411,8 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   j["composite_ms_mean_per_rank"] = composite_mean;
   j["composite_ms_p95_per_rank"] = composite_p95;
   j["composite_bytes_per_frame_per_rank"] = composite_bytes;
+  // The share of the frame inside each rank's footprint, a frame's mean: what it sends of each band.
+  j["composite_footprint_pct_per_rank"] = footprint;
   j["bytes_sent_per_frame_per_rank"] = bytes;
   // Simulation traffic: the rows of walkers changing owner, the placements sent for recuts, and for steered agents
   // the ghosts near the borders and the plan offers (dist/agent_exchange.h).

@@ -1,17 +1,101 @@
 // Sort-last compositing cost (dist/mpi_world.h MpiWorld::composite): `mpirun -np K strata_bench_composite
 // [WIDTH HEIGHT ITERATIONS]` composites a WIDTHxHEIGHT RGBA8 + float depth frame from every rank onto rank 0,
-// ITERATIONS times after a barrier each, and rank 0 prints the slowest rank's mean and p95 (ms) and the bytes each
-// rank sent per frame as one JSON line. The frames are a crowd frame's make-up (a ground every rank draws the same,
-// so that most pixels are depth ties, and each rank's own walkers in front of it).
+// ITERATIONS times per case after a barrier each, and rank 0 prints one JSON line: per layout of the walkers, the
+// slowest rank's mean and p95 (ms) with whole frames and with footprints, their ratio, and the bytes each rank
+// sent per frame.
+//
+// The frames are a crowd frame's make-up: a ground every rank draws the same (so most pixels are depth ties) and
+// each rank's own walkers in front of it, 400 upright rectangles a rank. Layouts: `scattered` (each rank's
+// walkers anywhere: footprints cover the frame, compositing's worst case), `columns` (slabs across the view: a
+// rank's walkers in its own strip of columns, as a camera looking across the partition axis sees them) and `rows`
+// (slabs along the view: nearer slabs lower in the frame). A footprint is the rectangle of the rank's walkers.
+// Both methods run in the same iterations, alternately, and rank 0 checks that they give the same image (exit
+// status 1 if not).
 // Not a Google Benchmark suite: every iteration is a collective, and each rank must time the same iterations.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "dist/mpi_world.h"
+
+namespace {
+
+enum class Layout { Scattered, Columns, Rows };
+
+struct Frame {
+  std::vector<std::uint8_t> colour;
+  std::vector<float> depth;
+  strata::ImageRect footprint;  // the box of this rank's walkers
+};
+
+Frame make_frame(int width, int height, int rank, int ranks, Layout layout) {
+  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  Frame f;
+  f.colour.resize(4 * pixels);
+  f.depth.resize(pixels);
+  // The sky (depth 1) above the horizon and the ground below it, the same on every rank.
+  const int horizon = height / 3;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x);
+      const bool ground = y > horizon;
+      f.depth[i] = ground ? 1.0f - 0.5f * static_cast<float>(y - horizon) / static_cast<float>(height) : 1.0f;
+      const auto shade = static_cast<std::uint8_t>(ground ? 60 + (x / 16 + y / 16) % 2 * 10 : 40);
+      f.colour[4 * i] = f.colour[4 * i + 1] = f.colour[4 * i + 2] = shade;
+      f.colour[4 * i + 3] = 255;
+    }
+  // Where this rank's walkers stand: anywhere, in its strip of columns, or in its strip of ground rows (rank 0
+  // nearest, lowest), each strip overlapping its neighbours by a walker's width as slabs' borders do on screen.
+  int x_lo = 0, x_hi = width - 1, y_lo = horizon, y_hi = height - 1;
+  const int overlap = width / 40;
+  if (layout == Layout::Columns) {
+    x_lo = std::max(0, rank * width / ranks - overlap);
+    x_hi = std::min(width - 1, (rank + 1) * width / ranks + overlap);
+  } else if (layout == Layout::Rows) {
+    const int ground = height - 1 - horizon;
+    y_hi = std::min(height - 1, height - 1 - rank * ground / ranks + overlap);
+    y_lo = std::max(horizon, height - 1 - (rank + 1) * ground / ranks);
+  }
+  std::mt19937 rng(static_cast<unsigned>(rank + 1));
+  std::uniform_int_distribution<int> px(x_lo, x_hi), py(y_lo, y_hi), size(4, 40), byte(0, 255);
+  f.footprint = {width, height, 0, 0};
+  for (int w = 0; w < 400; ++w) {
+    const int x0 = px(rng), y1 = py(rng), h = size(rng) * 2, wd = std::max(2, h / 4);
+    const float d = f.depth[static_cast<std::size_t>(y1) * static_cast<std::size_t>(width)] - 0.01f;
+    const auto c = static_cast<std::uint8_t>(byte(rng));
+    const int top = std::max(0, y1 - h), right = std::min(width, x0 + wd);
+    f.footprint = {std::min(f.footprint.x0, x0), std::min(f.footprint.y0, top), std::max(f.footprint.x1, right),
+                   std::max(f.footprint.y1, y1 + 1)};
+    for (int y = top; y <= y1; ++y)
+      for (int x = x0; x < right; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x);
+        if (d < f.depth[i]) f.depth[i] = d, f.colour[4 * i] = c, f.colour[4 * i + 1] = c / 2, f.colour[4 * i + 2] = 255 - c;
+      }
+  }
+  return f;
+}
+
+struct Timing {
+  std::vector<double> ms;
+  double bytes = 0;
+};
+
+double mean_of(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+}
+
+double p95_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[std::min(v.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(v.size())))];
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   const int width = argc > 1 ? std::atoi(argv[1]) : 1280;
@@ -22,68 +106,64 @@ int main(int argc, char** argv) {
     return 2;
   }
   strata::MpiWorld world;
-  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  // A crowd frame's make-up: the sky (depth 1) above the horizon and the ground below it, the same on every rank
-  // (every rank draws the ground), and this rank's walkers: 400 upright rectangles in front of the ground, about
-  // a tenth of the frame, their own colours.
-  std::mt19937 rng(static_cast<unsigned>(world.rank() + 1));
-  std::vector<std::uint8_t> colour(4 * pixels);
-  std::vector<float> depth(pixels);
-  const int horizon = height / 3;
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x);
-      const bool ground = y > horizon;
-      depth[i] = ground ? 1.0f - 0.5f * static_cast<float>(y - horizon) / static_cast<float>(height) : 1.0f;
-      const auto shade = static_cast<std::uint8_t>(ground ? 60 + (x / 16 + y / 16) % 2 * 10 : 40);
-      colour[4 * i] = colour[4 * i + 1] = colour[4 * i + 2] = shade;
-      colour[4 * i + 3] = 255;
+  bool same = true;
+  std::string json = "{\"ranks\":" + std::to_string(world.size()) + ",\"width\":" + std::to_string(width) +
+                     ",\"height\":" + std::to_string(height) + ",\"iterations\":" + std::to_string(iterations) +
+                     ",\"layouts\":{";
+  const std::pair<Layout, const char*> layouts[] = {
+      {Layout::Scattered, "scattered"}, {Layout::Columns, "columns"}, {Layout::Rows, "rows"}};
+  for (const auto& [layout, name] : layouts) {
+    const Frame frame = make_frame(width, height, world.rank(), world.size(), layout);
+    Timing whole, footprint;
+    std::vector<std::uint8_t> out_whole, out_footprint;
+    for (int i = 0; i < 2 * (iterations + 3); ++i) {
+      const bool with_footprint = i % 2 == 1;
+      Timing& t = with_footprint ? footprint : whole;
+      const std::size_t bytes_before = world.composite_bytes_sent();
+      world.barrier();
+      const auto start = std::chrono::steady_clock::now();
+      if (with_footprint)
+        world.composite(frame.colour, frame.depth, width, height, frame.footprint, out_footprint);
+      else
+        world.composite(frame.colour, frame.depth, width, height, out_whole);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      if (i >= 6) t.ms.push_back(ms);  // three warm-up frames each (first touch of the buffers, MPI's connections)
+      t.bytes = static_cast<double>(world.composite_bytes_sent() - bytes_before);
     }
-  std::uniform_int_distribution<int> px(0, width - 1), py(horizon, height - 1), size(4, 40), byte(0, 255);
-  for (int w = 0; w < 400; ++w) {
-    const int x0 = px(rng), y1 = py(rng), h = size(rng) * 2, wd = std::max(2, h / 4);
-    const float d = depth[static_cast<std::size_t>(y1) * static_cast<std::size_t>(width)] - 0.01f;
-    const auto c = static_cast<std::uint8_t>(byte(rng));
-    for (int y = std::max(0, y1 - h); y <= y1; ++y)
-      for (int x = x0; x < std::min(width, x0 + wd); ++x) {
-        const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x);
-        if (d < depth[i]) depth[i] = d, colour[4 * i] = c, colour[4 * i + 1] = c / 2, colour[4 * i + 2] = 255 - c;
+    if (world.rank() == 0 && out_whole != out_footprint) same = false;
+    const auto slowest = [&](double v) {
+      const std::vector<double> all = world.all_gather(v);
+      return *std::max_element(all.begin(), all.end());
+    };
+    const double whole_mean = slowest(mean_of(whole.ms)), whole_p95 = slowest(p95_of(whole.ms));
+    const double fp_mean = slowest(mean_of(footprint.ms)), fp_p95 = slowest(p95_of(footprint.ms));
+    const std::vector<double> whole_bytes = world.all_gather(whole.bytes), fp_bytes = world.all_gather(footprint.bytes);
+    const std::vector<double> area = world.all_gather(100.0 * static_cast<double>(frame.footprint.area()) /
+                                                      (static_cast<double>(width) * static_cast<double>(height)));
+    if (world.rank() != 0) continue;
+    const auto list = [](const std::vector<double>& v, const char* format) {
+      std::string s = "[";
+      char buf[64];
+      for (std::size_t r = 0; r < v.size(); ++r) {
+        std::snprintf(buf, sizeof buf, format, v[r]);
+        if (r) s += ',';
+        s += buf;
       }
+      return s + "]";
+    };
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "%s\"%s\":{\"whole_frame_ms_mean\":%.3f,\"whole_frame_ms_p95\":%.3f,\"footprint_ms_mean\":%.3f,"
+                  "\"footprint_ms_p95\":%.3f,\"speedup\":%.2f,",
+                  layout == Layout::Scattered ? "" : ",", name, whole_mean, whole_p95, fp_mean, fp_p95,
+                  fp_mean > 0 ? whole_mean / fp_mean : 0.0);
+    json += buf;
+    json += "\"footprint_pct_per_rank\":" + list(area, "%.1f") + ",\"whole_frame_bytes_per_rank\":" +
+            list(whole_bytes, "%.0f") + ",\"footprint_bytes_per_rank\":" + list(fp_bytes, "%.0f") + "}";
   }
-  std::vector<std::uint8_t> out;
-  std::vector<double> ms;
-  double exchange = 0, fold = 0, gather = 0;
-  for (int i = 0; i < iterations + 3; ++i) {
-    world.barrier();
-    const auto start = std::chrono::steady_clock::now();
-    world.composite(colour, depth, width, height, out);
-    const double t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    if (i >= 3) {  // three warm-up frames (first-touch of the buffers, MPI's connections)
-      ms.push_back(t);
-      const strata::MpiWorld::CompositeTimes stage = world.last_composite_times();
-      exchange += stage.exchange_ms, fold += stage.fold_ms, gather += stage.gather_ms;
-    }
-  }
-  std::sort(ms.begin(), ms.end());
-  double mean = 0;
-  for (double t : ms) mean += t;
-  mean /= static_cast<double>(ms.size());
-  const double p95 = ms[std::min(ms.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(ms.size())))];
-  const std::vector<double> means = world.all_gather(mean), p95s = world.all_gather(p95);
-  const std::vector<double> stages = {exchange / iterations, fold / iterations, gather / iterations};
-  const std::vector<double> exchange_ms = world.all_gather(stages[0]), fold_ms = world.all_gather(stages[1]),
-                            gather_ms = world.all_gather(stages[2]);
-  const std::vector<double> bytes =
-      world.all_gather(static_cast<double>(world.composite_bytes_sent()) / static_cast<double>(iterations + 3));
   if (world.rank() == 0) {
-    std::printf("{\"ranks\":%d,\"width\":%d,\"height\":%d,\"iterations\":%d,\"composite_ms_mean_slowest_rank\":%.3f,"
-                "\"composite_ms_p95_slowest_rank\":%.3f,\"bytes_sent_per_frame\":[",
-                world.size(), width, height, iterations, *std::max_element(means.begin(), means.end()),
-                *std::max_element(p95s.begin(), p95s.end()));
-    for (std::size_t r = 0; r < bytes.size(); ++r) std::printf("%s%.0f", r ? "," : "", bytes[r]);
-    std::printf("],\"stages_ms_slowest_rank\":{\"exchange\":%.3f,\"fold\":%.3f,\"gather\":%.3f}}\n",
-                *std::max_element(exchange_ms.begin(), exchange_ms.end()), *std::max_element(fold_ms.begin(), fold_ms.end()),
-                *std::max_element(gather_ms.begin(), gather_ms.end()));
+    json += "},\"same_image\":" + std::string(same ? "true" : "false") + "}";
+    std::printf("%s\n", json.c_str());
   }
-  return 0;
+  return same ? 0 : 1;
 }

@@ -130,64 +130,96 @@ std::vector<std::uint8_t> MpiWorld::exchange(const std::vector<std::vector<std::
 
 void MpiWorld::composite(std::span<const std::uint8_t> pixels, std::span<const float> depth, int width, int height,
                          std::vector<std::uint8_t>& out) {
+  composite(pixels, depth, width, height, ImageRect{0, 0, width, height}, out);
+}
+
+void MpiWorld::composite(std::span<const std::uint8_t> pixels, std::span<const float> depth, int width, int height,
+                         ImageRect footprint, std::vector<std::uint8_t>& out) {
   const auto pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   if (width <= 0 || height <= 0 || pixels.size() != 4 * pixel_count || depth.size() != pixel_count)
     throw std::invalid_argument("MpiWorld::composite: the frame's colour and depth do not match its size");
   const auto ranks = static_cast<std::size_t>(size_);
-  // Bands are contiguous rows in rank order, so the frame itself is the send buffer: band k starts where band
-  // k-1 ends.
-  std::vector<int> send_px(ranks), send_px_at(ranks), send_d(ranks), send_d_at(ranks);
-  for (int k = 0; k < size_; ++k) {
-    const auto [first, last] = band_rows(height, size_, k);
-    const auto uk = static_cast<std::size_t>(k);
-    send_d_at[uk] = as_count(static_cast<std::size_t>(first) * static_cast<std::size_t>(width), "composite");
-    send_d[uk] = as_count(static_cast<std::size_t>(last - first) * static_cast<std::size_t>(width), "composite");
-    send_px_at[uk] = 4 * send_d_at[uk];
-    send_px[uk] = 4 * send_d[uk];
-  }
   const auto mine = static_cast<std::size_t>(rank_);
-  const std::size_t band = static_cast<std::size_t>(send_d[mine]);
-  recv_pixels_.resize(4 * band * ranks);
-  recv_depth_.resize(band * ranks);
-  std::vector<int> recv_px(ranks, static_cast<int>(4 * band)), recv_px_at(ranks), recv_d(ranks, static_cast<int>(band)),
-      recv_d_at(ranks);
-  for (std::size_t r = 0; r < ranks; ++r) {
-    recv_d_at[r] = as_count(r * band, "composite");
-    recv_px_at[r] = as_count(4 * r * band, "composite");
-  }
   using clock = std::chrono::steady_clock;
   const auto ms_since = [](clock::time_point t) {
     return std::chrono::duration<double, std::milli>(clock::now() - t).count();
   };
   auto t = clock::now();
-  check(MPI_Alltoallv(pixels.data(), send_px.data(), send_px_at.data(), MPI_BYTE, recv_pixels_.data(), recv_px.data(),
-                      recv_px_at.data(), MPI_BYTE, MPI_COMM_WORLD),
+  // Every rank's footprint, so that each knows what it receives (16 bytes a rank).
+  footprint = clip_rect(footprint, width, height);
+  std::vector<ImageRect> footprints(ranks);
+  check(MPI_Allgather(&footprint, 4, MPI_INT, footprints.data(), 4, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
+  // A footprint as wide as the frame sends straight from the frame (its pieces are runs of whole rows, as the
+  // bands); a narrower one is packed row by row first. Colour and depth travel in two exchanges, so neither needs
+  // converting.
+  const bool whole_rows = footprint.x0 == 0 && footprint.x1 == width;
+  std::vector<int> send_px(ranks), send_px_at(ranks), send_d(ranks), send_d_at(ranks);
+  send_pixels_.clear();
+  send_depth_.clear();
+  std::size_t sent = sizeof(ImageRect);
+  for (std::size_t k = 0; k < ranks; ++k) {
+    const ImageRect piece = k == mine ? ImageRect{} : band_piece(footprint, height, size_, static_cast<int>(k));
+    if (whole_rows) {
+      send_d_at[k] = as_count(static_cast<std::size_t>(piece.y0) * static_cast<std::size_t>(width), "composite");
+    } else {
+      send_d_at[k] = as_count(send_depth_.size(), "composite");
+      pack_piece(pixels, depth, width, piece, send_pixels_, send_depth_);
+    }
+    send_d[k] = as_count(piece.area(), "composite");
+    send_px[k] = 4 * send_d[k], send_px_at[k] = 4 * send_d_at[k];
+    sent += 8 * piece.area();
+  }
+  std::vector<int> recv_px(ranks), recv_px_at(ranks), recv_d(ranks), recv_d_at(ranks);
+  std::size_t received = 0;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    recv_d_at[r] = as_count(received, "composite");
+    recv_d[r] = r == mine ? 0 : as_count(band_piece(footprints[r], height, size_, rank_).area(), "composite");
+    recv_px[r] = 4 * recv_d[r], recv_px_at[r] = 4 * recv_d_at[r];
+    received += static_cast<std::size_t>(recv_d[r]);
+  }
+  recv_pixels_.resize(4 * received);
+  recv_depth_.resize(received);
+  check(MPI_Alltoallv(whole_rows ? pixels.data() : send_pixels_.data(), send_px.data(), send_px_at.data(), MPI_BYTE,
+                      recv_pixels_.data(), recv_px.data(), recv_px_at.data(), MPI_BYTE, MPI_COMM_WORLD),
         "MPI_Alltoallv");
-  check(MPI_Alltoallv(depth.data(), send_d.data(), send_d_at.data(), MPI_FLOAT, recv_depth_.data(), recv_d.data(),
-                      recv_d_at.data(), MPI_FLOAT, MPI_COMM_WORLD),
+  check(MPI_Alltoallv(whole_rows ? depth.data() : send_depth_.data(), send_d.data(), send_d_at.data(), MPI_FLOAT,
+                      recv_depth_.data(), recv_d.data(), recv_d_at.data(), MPI_FLOAT, MPI_COMM_WORLD),
         "MPI_Alltoallv");
-  std::size_t sent = 0;
-  for (std::size_t r = 0; r < ranks; ++r)
-    if (r != mine) sent += static_cast<std::size_t>(send_px[r]) + 4 * static_cast<std::size_t>(send_d[r]);
   times_.exchange_ms = ms_since(t);
   t = clock::now();
-  // Fold the band: rank 0's piece first, then the others (the rules are order-free; a fixed order anyway).
-  band_pixels_.assign(recv_pixels_.begin(), recv_pixels_.begin() + static_cast<std::ptrdiff_t>(4 * band));
-  band_depth_.assign(recv_depth_.begin(), recv_depth_.begin() + static_cast<std::ptrdiff_t>(band));
-  for (std::size_t r = 1; r < ranks; ++r)
-    composite_nearest(band_pixels_, band_depth_,
-                      std::span<const std::uint8_t>(recv_pixels_.data() + 4 * r * band, 4 * band),
-                      std::span<const float>(recv_depth_.data() + r * band, band));
+  // Fold the band: this rank's own rows whole (outside the others' footprints they hold what the others drew
+  // too), then the others' pieces in rank order (the rules are order-free; a fixed order anyway).
+  const auto [first, last] = band_rows(height, size_, rank_);
+  const std::size_t band_at = static_cast<std::size_t>(first) * static_cast<std::size_t>(width);
+  const std::size_t band = static_cast<std::size_t>(last - first) * static_cast<std::size_t>(width);
+  band_pixels_.assign(pixels.begin() + static_cast<std::ptrdiff_t>(4 * band_at),
+                      pixels.begin() + static_cast<std::ptrdiff_t>(4 * (band_at + band)));
+  band_depth_.assign(depth.begin() + static_cast<std::ptrdiff_t>(band_at),
+                     depth.begin() + static_cast<std::ptrdiff_t>(band_at + band));
+  for (std::size_t r = 0; r < ranks; ++r)
+    if (r != mine)
+      fold_piece(band_pixels_, band_depth_, width, first, band_piece(footprints[r], height, size_, rank_),
+                 std::span<const std::uint8_t>(recv_pixels_).subspan(static_cast<std::size_t>(recv_px_at[r]),
+                                                                     static_cast<std::size_t>(recv_px[r])),
+                 std::span<const float>(recv_depth_).subspan(static_cast<std::size_t>(recv_d_at[r]),
+                                                             static_cast<std::size_t>(recv_d[r])));
   times_.fold_ms = ms_since(t);
   t = clock::now();
   // Rank 0 gathers the folded bands, in rank order = row order.
+  std::vector<int> band_counts(ranks), band_starts(ranks);
+  for (int k = 0; k < size_; ++k) {
+    const auto [f, l] = band_rows(height, size_, k);
+    band_starts[static_cast<std::size_t>(k)] = as_count(4 * static_cast<std::size_t>(f) * static_cast<std::size_t>(width), "composite");
+    band_counts[static_cast<std::size_t>(k)] = as_count(4 * static_cast<std::size_t>(l - f) * static_cast<std::size_t>(width), "composite");
+  }
   out.clear();
   if (rank_ == 0) out.resize(4 * pixel_count);
-  check(MPI_Gatherv(band_pixels_.data(), static_cast<int>(4 * band), MPI_BYTE, out.data(), send_px.data(),
-                    send_px_at.data(), MPI_BYTE, 0, MPI_COMM_WORLD),
+  check(MPI_Gatherv(band_pixels_.data(), as_count(4 * band, "composite"), MPI_BYTE, out.data(), band_counts.data(),
+                    band_starts.data(), MPI_BYTE, 0, MPI_COMM_WORLD),
         "MPI_Gatherv");
   times_.gather_ms = ms_since(t);
   if (rank_ != 0) sent += 4 * band;
+  footprint_pixels_ += footprint.area();
   composite_bytes_ += sent;
   bytes_sent_ += sent;
 }

@@ -1,8 +1,9 @@
 #pragma once
 // The one process group a distributed run is (OpenMPI's MPI_COMM_WORLD), and the few collectives the crowd needs:
 // agreeing on bounds and on failure, gathering reports to rank 0, and compositing the frame (dist/composite.h) by
-// direct send: the image is cut into one band of rows per rank, every rank sends each band of its frame to the
-// rank that owns the band (one MPI_Alltoallv), each rank folds its band, and rank 0 gathers the bands.
+// direct send: the image is cut into one band of rows per rank, every rank sends the part of each band inside its
+// footprint (the pixels its walkers and their shadows touch) to the rank that owns the band (one MPI_Alltoallv),
+// each rank folds those pieces into its own frame's band, and rank 0 gathers the bands.
 //
 // Why direct send (radix-k with a single round of k = ranks) rather than IceT or binary swap: IceT ships on Debian
 // only inside ParaView's VTK (libvtkIceTCore/libvtkIceTMPI and paraview-dev's headers, a few hundred MB of
@@ -18,6 +19,8 @@
 #include <span>
 #include <string>
 #include <vector>
+
+#include "dist/composite.h"
 
 namespace strata {
 
@@ -51,7 +54,11 @@ class MpiWorld {
   std::vector<std::uint8_t> exchange(const std::vector<std::vector<std::uint8_t>>& to_rank);
 
   // Composites every rank's `pixels` (RGBA8, rows top to bottom) and `depth` (one float a pixel, same rows) into
-  // `out` on rank 0 (the others' `out` is left empty). Counts the bytes this rank sent.
+  // `out` on rank 0 (the others' `out` is left empty). Counts the bytes this rank sent. With a `footprint`, the
+  // pixels outside it must be the scene every rank draws alike (dist/composite.h): only the footprint's part of
+  // each band is sent. Without, the whole frame is.
+  void composite(std::span<const std::uint8_t> pixels, std::span<const float> depth, int width, int height,
+                 ImageRect footprint, std::vector<std::uint8_t>& out);
   void composite(std::span<const std::uint8_t> pixels, std::span<const float> depth, int width, int height,
                  std::vector<std::uint8_t>& out);
 
@@ -64,13 +71,15 @@ class MpiWorld {
   // Bytes this rank has sent since construction (compositing, gathers, reductions), and those of compositing.
   std::size_t bytes_sent() const { return bytes_sent_; }
   std::size_t composite_bytes_sent() const { return composite_bytes_; }
+  // The pixels of this rank's footprints summed over every composite() since construction.
+  std::size_t footprint_pixels() const { return footprint_pixels_; }
 
   // Ends every rank of the job now (MPI_Abort) with exit status `code`.
   [[noreturn]] void abort(int code);
 
  private:
   int rank_ = 0, size_ = 1;
-  std::size_t bytes_sent_ = 0, composite_bytes_ = 0;
+  std::size_t bytes_sent_ = 0, composite_bytes_ = 0, footprint_pixels_ = 0;
   CompositeTimes times_;
   // Compositing scratch, grown, never shrunk.
   std::vector<std::uint8_t> send_pixels_, recv_pixels_, band_pixels_;

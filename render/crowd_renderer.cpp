@@ -95,7 +95,56 @@ struct CrowdRenderer::Impl {
     return ground_points;
   }
   std::vector<glm::vec3> casters;        // scratch
+  PixelRect footprint;
 };
+
+namespace {
+
+// The box of the bodies' finite vertices (for bodies drawn without skeletons); lo > hi when there are none.
+void body_vertex_bounds(const BodySource& bodies, glm::vec3& lo, glm::vec3& hi) {
+  lo = glm::vec3(std::numeric_limits<float>::max()), hi = glm::vec3(std::numeric_limits<float>::lowest());
+  for (std::size_t k = 0; k < bodies.batch_count(); ++k)
+    if (const BodyBatch batch = bodies.batch(k); const BodyDrawInput* b = std::get_if<BodyDrawInput>(&batch))
+      for (std::size_t w = 0; w < b->walker_count; ++w)
+        for (std::size_t v = 0; v < b->vertex_count; ++v) {
+          const std::size_t i = w * b->stride + v;
+          const glm::vec3 p(b->px[i], b->py[i], b->pz[i]);
+          if (std::isfinite(p.x + p.y + p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
+        }
+}
+
+// How far a body reaches past its joints (hands past the wrists, the crown past the skull base, flesh around
+// the bones): what the shadow frustum and the footprint grow the joints' box by.
+constexpr float kBodyReach = 0.35f;
+
+// The box of what a frame draws of walkers: the joints grown by a body's reach (or, for bodies without
+// skeletons, their vertices), and each impostor's quad (a sphere about the quad's centre holds it, whichever way
+// it turns to face the eye).
+void walker_bounds(const SkeletonDrawInput& input, const BodySource& bodies, glm::vec3& lo, glm::vec3& hi) {
+  lo = glm::vec3(std::numeric_limits<float>::max()), hi = glm::vec3(std::numeric_limits<float>::lowest());
+  const std::span<const glm::vec3> joints = drawn_joint_positions(input);
+  for (const glm::vec3& p : joints)
+    if (std::isfinite(p.x + p.y + p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  if (lo.x <= hi.x) {
+    lo -= glm::vec3(kBodyReach), hi += glm::vec3(kBodyReach);
+  } else if (joints.empty()) {
+    body_vertex_bounds(bodies, lo, hi);
+  }
+  for (std::size_t k = 0; k < bodies.batch_count(); ++k) {
+    const BodyBatch batch = bodies.batch(k);
+    const ImpostorBatch* b = std::get_if<ImpostorBatch>(&batch);
+    if (!b || !b->atlas) continue;
+    const float radius = 0.5f * std::hypot(b->atlas->cell_width_m, b->atlas->cell_height_m);
+    for (std::size_t w = 0; w < b->walker_count; ++w) {
+      const float s = b->scale[w];
+      const glm::vec3 centre(b->x[w], b->y[w] + b->atlas->center_height_m * s, b->z[w]);
+      if (!std::isfinite(centre.x + centre.y + centre.z + s)) continue;
+      lo = glm::min(lo, centre - glm::vec3(radius * s)), hi = glm::max(hi, centre + glm::vec3(radius * s));
+    }
+  }
+}
+
+}  // namespace
 
 CrowdRenderer::CrowdRenderer(int width, int height, RenderOptions options)
     : impl_(std::make_unique<Impl>(width, height, options)) {}
@@ -139,6 +188,7 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
                      r.profiler);
     r.triangles_drawn = r.tracer->triangles_traced();
     r.last_traced = true;
+    r.footprint = PixelRect{0, 0, r.target.width(), r.target.height()};
     return;
   }
   r.last_traced = false;
@@ -170,19 +220,12 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
     }
     if (casters.empty()) {
       // Bodies without skeletons (a caller drawing meshes only): the corners of their vertices' bounds.
-      glm::vec3 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
-      for (std::size_t k = 0; k < bodies.batch_count(); ++k)
-        if (const BodyBatch batch = bodies.batch(k); const BodyDrawInput* b = std::get_if<BodyDrawInput>(&batch))
-          for (std::size_t w = 0; w < b->walker_count; ++w)
-            for (std::size_t v = 0; v < b->vertex_count; ++v) {
-              const std::size_t i = w * b->stride + v;
-              const glm::vec3 p(b->px[i], b->py[i], b->pz[i]);
-              if (std::isfinite(p.x + p.y + p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
-            }
+      glm::vec3 lo, hi;
+      body_vertex_bounds(bodies, lo, hi);
       r.casters.assign({lo, hi});
       if (lo.x <= hi.x) casters = r.casters;
     }
-    shaded.shadows = r.shadow->begin(sun.to_sun, casters, 0.35f);
+    shaded.shadows = r.shadow->begin(sun.to_sun, casters, kBodyReach);
     if (shaded.shadows) {
       r.body.draw_shadow(bodies, *r.shadow);
       r.props.draw_shadow(*r.shadow);
@@ -204,6 +247,15 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
   timer.start("resolve");
   r.target.resolve();
   timer.stop();
+  glm::vec3 lo, hi;
+  walker_bounds(input, bodies, lo, hi);
+  if (shaded.shadows) {
+    // The filtered lookup and its normal offset spread a shadow's edge by about two and a half texels.
+    const float spread = 3.0f * r.shadow->texel_world();
+    lo -= glm::vec3(spread, 0.0f, spread), hi += glm::vec3(spread, 0.0f, spread);
+  }
+  r.footprint = screen_footprint(lo, hi, shaded.shadows ? &sun.to_sun : nullptr, projection * view, r.target.width(),
+                                 r.target.height());
 }
 
 void CrowdRenderer::render_instanced_reference(const BodyDrawInput& mesh, std::span<const glm::vec3> offsets,
@@ -213,10 +265,12 @@ void CrowdRenderer::render_instanced_reference(const BodyDrawInput& mesh, std::s
   r.reference->upload(mesh, offsets);
   r.target.begin_frame(r.options.clear_color);
   r.triangles_drawn = r.reference->draw(view, projection, r.options.skin_color);
+  r.footprint = PixelRect{0, 0, r.target.width(), r.target.height()};
   glBindVertexArray(0);
   r.target.resolve();
 }
 
+PixelRect CrowdRenderer::last_footprint() const { return impl_->footprint; }
 void CrowdRenderer::finish() const { glFinish(); }
 void CrowdRenderer::read_rgba(std::vector<std::uint8_t>& out) const {
   if (impl_->last_traced) out = impl_->traced;

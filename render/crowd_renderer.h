@@ -22,6 +22,7 @@
 #include <glm/vec3.hpp>
 
 #include "render/body_source.h"
+#include "render/footprint.h"
 #include "render/props_pass.h"
 #include "render/render_options.h"
 #include "render/skeleton_input.h"
@@ -74,6 +75,10 @@ class CrowdRenderer {
   // same target with the same material: raw instancing of the same triangles, with nothing streamed.
   void render_instanced_reference(const BodyDrawInput& mesh, std::span<const glm::vec3> offsets, const glm::mat4& view,
                                   const glm::mat4& projection);
+  // The pixels the last render()'s walkers (bodies, skeletons, impostors) and their shadows can have changed
+  // (render/footprint.h): outside it the frame holds only sky, ground and props. The whole frame after a
+  // ray-traced frame or render_instanced_reference; empty when no walker was drawn.
+  PixelRect last_footprint() const;
   // Waits until the GL has finished every command (for timing).
   void finish() const;
   // RGBA8 pixels, rows top to bottom (image order), width*height*4 bytes.

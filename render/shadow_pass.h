@@ -40,6 +40,8 @@ class ShadowPass {
   bool begin(const glm::vec3& to_sun, std::span<const glm::vec3> casters, float reach);
   // The light's world -> clip matrix of this frame (what the depth draws use).
   const glm::mat4& light_view_projection() const { return view_projection_; }
+  // One texel of this frame's map in metres: how far the filtered lookup spreads a shadow's edge.
+  float texel_world() const { return texel_world_; }
   // The program that draws the bodies' three position arrays into the map (render/shaders/shadow.vert).
   unsigned body_program() const { return body_program_.id(); }
   // Restores the state begin() changed. The map is then ready to sample.

@@ -157,6 +157,93 @@ TEST(Composite, BandsCoverEveryRowOnce) {
   EXPECT_THROW(band_rows(10, 2, 2), std::invalid_argument);
 }
 
+// Footprints (dist/composite.h): K frames that share a background and each hold their own "walkers" inside their
+// footprint, composited as MpiWorld::composite does it (each band's owner starts from its own frame and folds in
+// the others' pieces of the band, packed and unpacked), give the image of folding the whole frames; a footprint
+// that leaves out one of its walkers does not (the test can fail). Bad pieces are refused.
+TEST(Composite, FootprintsGiveTheWholeFramesImage) {
+  const int width = 61, height = 37, ranks = 3;
+  const std::size_t n = static_cast<std::size_t>(width) * height;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> byte(0, 255);
+  std::vector<std::uint8_t> shared_colour(4 * n);
+  std::vector<float> shared_depth(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    shared_depth[i] = i < n / 3 ? 1.0f : 0.9f - 0.0001f * static_cast<float>(i % 97);
+    for (int c = 0; c < 4; ++c) shared_colour[4 * i + c] = static_cast<std::uint8_t>(byte(rng));
+  }
+  std::vector<std::vector<std::uint8_t>> colour(ranks, shared_colour);
+  std::vector<std::vector<float>> depth(ranks, shared_depth);
+  std::vector<ImageRect> footprint(ranks);
+  const ImageRect boxes[ranks][2] = {{{2, 3, 20, 30}, {15, 25, 33, 36}},  // each rank: two walkers, overlapping others'
+                                     {{18, 0, 40, 12}, {30, 10, 50, 35}},
+                                     {{45, 5, 61, 37}, {0, 33, 8, 37}}};
+  for (int r = 0; r < ranks; ++r) {
+    footprint[r] = {width, height, 0, 0};
+    for (const ImageRect& b : boxes[r]) {
+      footprint[r] = {std::min(footprint[r].x0, b.x0), std::min(footprint[r].y0, b.y0), std::max(footprint[r].x1, b.x1),
+                      std::max(footprint[r].y1, b.y1)};
+      for (int y = b.y0; y < b.y1; ++y)
+        for (int x = b.x0; x < b.x1; ++x) {
+          const std::size_t i = static_cast<std::size_t>(y) * width + static_cast<std::size_t>(x);
+          // Nearer than the background, or a shadow on it (same depth, darker): both kinds a walker makes.
+          if ((x + y + r) % 3 == 0) {
+            for (int c = 0; c < 3; ++c) colour[r][4 * i + c] = static_cast<std::uint8_t>(colour[r][4 * i + c] / 2);
+          } else {
+            depth[r][i] = 0.5f - 0.01f * static_cast<float>((x * 7 + y * 3 + r) % 13);
+            for (int c = 0; c < 4; ++c) colour[r][4 * i + c] = static_cast<std::uint8_t>(byte(rng));
+          }
+        }
+    }
+  }
+  std::vector<std::uint8_t> whole = colour[0];
+  std::vector<float> whole_depth = depth[0];
+  for (int r = 1; r < ranks; ++r) composite_nearest(whole, whole_depth, colour[r], depth[r]);
+  const auto by_footprints = [&](const std::vector<ImageRect>& fp) {
+    std::vector<std::uint8_t> image;
+    for (int k = 0; k < ranks; ++k) {
+      const auto [first, last] = band_rows(height, ranks, k);
+      const std::size_t at = static_cast<std::size_t>(first) * width, band = static_cast<std::size_t>(last - first) * width;
+      std::vector<std::uint8_t> band_colour(colour[k].begin() + 4 * at, colour[k].begin() + 4 * (at + band));
+      std::vector<float> band_depth(depth[k].begin() + at, depth[k].begin() + at + band);
+      for (int r = 0; r < ranks; ++r) {
+        if (r == k) continue;
+        const ImageRect piece = band_piece(clip_rect(fp[r], width, height), height, ranks, k);
+        std::vector<std::uint8_t> piece_colour;
+        std::vector<float> piece_depth;
+        pack_piece(colour[r], depth[r], width, piece, piece_colour, piece_depth);
+        EXPECT_EQ(piece_depth.size(), piece.area());
+        fold_piece(band_colour, band_depth, width, first, piece, piece_colour, piece_depth);
+      }
+      image.insert(image.end(), band_colour.begin(), band_colour.end());
+    }
+    return image;
+  };
+  EXPECT_EQ(by_footprints(footprint), whole);
+  std::vector<ImageRect> wide = footprint;  // grown past the frame: clipped, the same image
+  for (ImageRect& f : wide) f = {f.x0 - 5, f.y0 - 5, f.x1 + 9, f.y1 + 9};
+  EXPECT_EQ(by_footprints(wide), whole);
+  std::vector<ImageRect> short_of_one = footprint;
+  short_of_one[1] = boxes[1][0];  // leaves rank 1's second walker out
+  EXPECT_NE(by_footprints(short_of_one), whole);
+
+  EXPECT_EQ(clip_rect({-3, -3, -1, 5}, width, height), ImageRect{});
+  EXPECT_EQ(band_piece({0, 0, width, 5}, height, ranks, 2), ImageRect{});
+  std::vector<std::uint8_t> band_colour(4 * 13 * width);
+  std::vector<float> band_depth(13 * width);
+  std::vector<std::uint8_t> four_colour(4 * 4), eight_colour(4 * 8);
+  std::vector<float> four_depth(4), eight_depth(8);
+  EXPECT_THROW(fold_piece(band_colour, band_depth, width, 0, {0, 0, 2, 3}, four_colour, four_depth), std::invalid_argument)
+      << "too few pixels";
+  EXPECT_THROW(fold_piece(band_colour, band_depth, width, 0, {0, 0, 2, 2}, four_colour, eight_depth), std::invalid_argument)
+      << "colour and depth disagree";
+  EXPECT_THROW(fold_piece(band_colour, band_depth, width, 5, {0, 0, 2, 2}, four_colour, four_depth), std::invalid_argument)
+      << "above the band";
+  EXPECT_THROW(fold_piece(band_colour, band_depth, width, 0, {0, 10, 2, 14}, eight_colour, eight_depth), std::invalid_argument)
+      << "below it";
+  EXPECT_THROW(pack_piece(colour[0], depth[0], width, {0, 30, 2, 40}, four_colour, four_depth), std::invalid_argument);
+}
+
 TEST(Ownership, CullsWalkersOutsideTheSlabAndRefusesBadInput) {
   const std::vector<float> placement = {-2, 0, 1, 5, /*y*/ 0, 0, 0, 0, /*z*/ 0, 0, 0, 0};  // x row, y row, z row
   std::vector<std::uint8_t> decided = {0, 1, 2, 6};

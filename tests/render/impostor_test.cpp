@@ -1,6 +1,7 @@
 // Impostors on a real headless GL (Mesa llvmpipe through EGL): the baked atlas holds the walker in every cell with
 // unit normals; an impostor drawn where a mesh walker stood looks like it; impostors sort by their baked depth
-// whatever order they are drawn in; a malformed batch is refused before the frame starts.
+// whatever order they are drawn in; a malformed batch is refused before the frame starts; a frame's footprint
+// (render/footprint.h) holds every pixel its walkers, meshes or impostors, and their shadows change.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 
 #include "io/hanim_loader.h"
 #include "render/crowd_renderer.h"
+#include "render/footprint.h"
 #include "render/gl_context.h"
 #include "render/impostor_bake.h"
 #include "render/scene_draw.h"
@@ -187,6 +189,84 @@ TEST_F(ImpostorTest, AnImpostorLooksLikeTheMeshItReplaces) {
   render_frame(*empty, renderer, camera, aspect, height, scratch);
   renderer.read_rgba(c);
   EXPECT_LT(psnr(b, c), 35.0);
+}
+
+// The footprint a distributed crowd composites by (dist/composite.h): the frame of two walkers against the frame
+// of the same scene without them, both fitting the ground and the sun's frustum to one shared box as the
+// processes of a distributed crowd do (RenderFrameOptions::share_bounds), at high quality under a low sun (shadows
+// about 1.3 times as long as a walker is tall). Every pixel that differs lies inside the footprint; some lie
+// outside the walkers' own rectangle (their shadows, which the footprint must hold); and the footprint is not
+// the whole frame. As meshes and as impostors (which cast no shadow).
+TEST_F(ImpostorTest, TheFootprintHoldsEveryPixelTheWalkersAndTheirShadowsChange) {
+  const int width = 320, height = 200;
+  const float aspect = float(width) / float(height);
+  CrowdRenderer renderer(width, height);
+  renderer.options().quality = RenderQuality::High;
+  renderer.options().to_sun = {-0.55f, 0.55f, 0.45f};
+  Profiler profiler(1, false);
+  for (const DetailLevel level : {DetailLevel::mesh(2), DetailLevel::impostor()}) {
+    auto make = [&](std::size_t walkers) {
+      auto crowd = std::make_unique<Crowd>(default_rig());
+      set_detail_level(*crowd, level);
+      CrowdConfig config;
+      config.walkers = walkers;
+      config.motion = MotionSource::Walk;
+      spawn_crowd(*crowd, config);
+      crowd->impostor_atlas = std::make_shared<const ImpostorAtlas>(*atlas_);
+      for (int f = 0; f < 3; ++f) step(*crowd, 1.0f / 30.0f, profiler);
+      return crowd;
+    };
+    const auto crowd = make(2), empty = make(0);
+    // The walkers' feet, from their placements.
+    glm::vec3 feet_lo(1e9f), feet_hi(-1e9f);
+    for (std::size_t s = 0; s < kDetailSlots; ++s) {
+      const SoaTable& t = crowd->table(static_cast<DetailSlot>(s));
+      for (std::size_t row = 0; row < t.size(); ++row) {
+        const glm::vec3 p(t.f32(kWalkerPlacement, 0)[row], t.f32(kWalkerPlacement, 1)[row], t.f32(kWalkerPlacement, 2)[row]);
+        feet_lo = glm::min(feet_lo, p), feet_hi = glm::max(feet_hi, p);
+      }
+    }
+    ASSERT_LE(feet_lo.x, feet_hi.x) << "the walkers stand somewhere";
+    const glm::vec3 box_lo = feet_lo - glm::vec3(2.0f, 0.5f, 2.0f), box_hi = feet_hi + glm::vec3(2.0f, 2.5f, 2.0f);
+    RenderFrameOptions shared;
+    shared.share_bounds = [&](glm::vec3& lo, glm::vec3& hi) { lo = box_lo, hi = box_hi; };
+    // Looking down at the walkers from 9 m: ground all round them.
+    OrbitCamera camera;
+    camera.fov_y = 0.8f;
+    camera.pitch = 0.6f;
+    camera.yaw = 0.4f;
+    camera.target = 0.5f * (feet_lo + feet_hi) + glm::vec3(0.0f, 0.9f, 0.0f);
+    camera.distance = 9.0f;
+    RenderScratch scratch;
+    std::vector<std::uint8_t> background, frame;
+    render_frame(*empty, renderer, camera, aspect, height, scratch, shared);
+    EXPECT_TRUE(renderer.last_footprint().empty()) << "no walkers, no footprint";
+    renderer.read_rgba(background);
+    render_frame(*crowd, renderer, camera, aspect, height, scratch, shared);
+    renderer.read_rgba(frame);
+    const PixelRect footprint = renderer.last_footprint();
+    // The walkers' own rectangle: their feet's box up to a tall walker's height, grown by a body's reach.
+    const PixelRect bodies = screen_footprint(feet_lo - glm::vec3(0.4f), feet_hi + glm::vec3(0.4f, 2.3f, 0.4f), nullptr,
+                                              camera.projection(aspect) * camera.view(), width, height);
+    std::size_t changed = 0, outside = 0, beyond_bodies = 0;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) {
+        const std::size_t i = 4 * (static_cast<std::size_t>(y) * width + static_cast<std::size_t>(x));
+        if (std::equal(&frame[i], &frame[i] + 4, &background[i])) continue;
+        ++changed;
+        outside += !footprint.contains(x, y);
+        beyond_bodies += !bodies.contains(x, y);
+      }
+    const bool meshes = level.is_mesh();
+    EXPECT_GT(changed, 500u) << (meshes ? "meshes" : "impostors") << ": the walkers are in the frame";
+    EXPECT_EQ(outside, 0u) << (meshes ? "meshes" : "impostors") << ": footprint " << footprint.x0 << "," << footprint.y0
+                           << " - " << footprint.x1 << "," << footprint.y1;
+    if (meshes) {
+      EXPECT_GT(beyond_bodies, 50u) << "shadows fall beyond the walkers' own rectangle";
+    }
+    const double share = double(footprint.x1 - footprint.x0) * double(footprint.y1 - footprint.y0) / (double(width) * height);
+    EXPECT_LT(share, 0.8) << (meshes ? "meshes" : "impostors");
+  }
 }
 
 // Two impostors, one behind the other: the same image whichever is drawn first (each writes its baked depth).

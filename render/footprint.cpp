@@ -1,0 +1,45 @@
+#include "render/footprint.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/vec4.hpp>
+
+namespace strata {
+
+PixelRect screen_footprint(const glm::vec3& lo, const glm::vec3& hi, const glm::vec3* to_sun,
+                           const glm::mat4& view_projection, int width, int height, int pad_px) {
+  const PixelRect whole{0, 0, std::max(width, 0), std::max(height, 0)};
+  for (float v : {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z})
+    if (std::isnan(v)) return whole;
+  if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z) return {};  // nothing of this process's in the frame
+  if (!std::isfinite(lo.x + lo.y + lo.z + hi.x + hi.y + hi.z)) return whole;
+  if (to_sun && !(to_sun->y > 0.05f)) return whole;  // also for a NaN sun
+  float x_min = INFINITY, x_max = -INFINITY, y_min = INFINITY, y_max = -INFINITY;
+  const auto add = [&](const glm::vec3& p) {
+    const glm::vec4 c = view_projection * glm::vec4(p, 1.0f);
+    // Behind the eye or on its plane the projection folds over: no rectangle bounds such a point.
+    if (!(c.w > 1e-4f)) return false;
+    const float x = c.x / c.w, y = c.y / c.w;
+    x_min = std::min(x_min, x), x_max = std::max(x_max, x);
+    y_min = std::min(y_min, y), y_max = std::max(y_max, y);
+    return true;
+  };
+  for (int k = 0; k < 8; ++k) {
+    const glm::vec3 corner((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
+    if (!add(corner)) return whole;
+    if (to_sun && corner.y > 0.0f && !add(corner - *to_sun * (corner.y / to_sun->y))) return whole;
+  }
+  if (!std::isfinite(x_min + x_max + y_min + y_max)) return whole;
+  // NDC x in [-1, 1] left to right; y in [-1, 1] bottom to top, rows counted from the top. Clamped in floats
+  // first: a box far off screen projects to values no int holds.
+  const auto column = [&](float ndc) { return std::clamp((ndc + 1.0f) * 0.5f * static_cast<float>(width), -1.0f, static_cast<float>(width) + 1.0f); };
+  const auto row = [&](float ndc) { return std::clamp((1.0f - ndc) * 0.5f * static_cast<float>(height), -1.0f, static_cast<float>(height) + 1.0f); };
+  PixelRect r{static_cast<int>(std::floor(column(x_min))) - pad_px, static_cast<int>(std::floor(row(y_max))) - pad_px,
+              static_cast<int>(std::ceil(column(x_max))) + pad_px, static_cast<int>(std::ceil(row(y_min))) + pad_px};
+  r.x0 = std::max(r.x0, 0), r.y0 = std::max(r.y0, 0);
+  r.x1 = std::min(r.x1, whole.x1), r.y1 = std::min(r.y1, whole.y1);
+  return r.empty() ? PixelRect{} : r;
+}
+
+}  // namespace strata
