@@ -27,6 +27,7 @@
 #include "render/crowd_renderer.h"
 #include "scene/crowd.h"
 #include "scene/crowd_agents.h"
+#include "scene/crowd_metrics.h"
 #include "scene/state_hash.h"
 
 #if defined(STRATA_HAVE_MPI)
@@ -102,6 +103,7 @@ struct CrowdDistribution::Impl {
   // and plan offers sent and ghosts received (scene/crowd_agents.h AgentExchange).
   std::size_t migrated_out = 0, migration_bytes = 0, recut_bytes = 0;
   std::size_t ghost_bytes = 0, plan_bytes = 0, ghosts_received = 0, agent_steps = 0;
+  std::size_t observation_bytes = 0;  // `strata report crowd`'s border observations sent
   std::vector<double> compute_ms, composite_ms, depth_read_ms, wait_ms;
   std::vector<float> depth;
   std::vector<std::uint8_t> composited;
@@ -239,9 +241,23 @@ void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
 
 std::vector<double> CrowdDistribution::all_gather(double value) { return impl_->world.all_gather(value); }
 
-std::vector<std::uint8_t> CrowdDistribution::gather_to_root(std::span<const std::uint8_t> bytes) {
-  std::vector<std::size_t> sizes;
-  return impl_->world.gather_to_root(bytes, sizes);
+std::vector<AgentObservation> CrowdDistribution::exchange_border_observations(std::span<const AgentObservation> mine,
+                                                                              float reach) {
+  Impl& d = *impl_;
+  const std::vector<std::vector<std::uint8_t>> to_rank =
+      pack_border_observations(mine, d.partition, d.world.rank(), reach);
+  for (const std::vector<std::uint8_t>& bytes : to_rank) d.observation_bytes += bytes.size();
+  std::vector<AgentObservation> border;
+  unpack_border_observations(d.world.exchange(to_rank), border);
+  return border;
+}
+
+std::vector<std::uint8_t> CrowdDistribution::gather_to_root(std::span<const std::uint8_t> bytes,
+                                                            std::vector<std::size_t>* sizes) {
+  std::vector<std::size_t> counts;
+  std::vector<std::uint8_t> all = impl_->world.gather_to_root(bytes, counts);
+  if (sizes) *sizes = std::move(counts);
+  return all;
 }
 
 void CrowdDistribution::share_bounds(glm::vec3& lo, glm::vec3& hi) {
@@ -374,6 +390,8 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   const std::vector<double> migrated = d.world.all_gather(static_cast<double>(d.migrated_out));
   const std::vector<double> recut = d.world.all_gather(static_cast<double>(d.recut_bytes) * per_frame);
   const std::vector<double> ghost_bytes = d.world.all_gather(static_cast<double>(d.ghost_bytes) * per_frame);
+  const std::vector<double> observation_bytes =
+      d.world.all_gather(static_cast<double>(d.observation_bytes) * per_frame);
   const std::vector<double> plan_bytes = d.world.all_gather(static_cast<double>(d.plan_bytes) * per_frame);
   const std::vector<double> ghosts = d.world.all_gather(
       d.agent_steps > 0 ? static_cast<double>(d.ghosts_received) / static_cast<double>(d.agent_steps) : 0.0);
@@ -420,6 +438,8 @@ nlohmann::json CrowdDistribution::summary(std::size_t frames) {
   j["walkers_migrated_per_rank"] = migrated;
   j["recut_bytes_per_frame_per_rank"] = recut;
   j["ghost_bytes_per_frame_per_rank"] = ghost_bytes;
+  // `strata report crowd` only: the agents near the borders that the crowd's pair figures need (0 otherwise).
+  j["report_border_bytes_per_frame_per_rank"] = observation_bytes;
   j["ghosts_received_mean_per_rank"] = ghosts;
   j["plan_offer_bytes_per_frame_per_rank"] = plan_bytes;
   j["peak_rss_mib_per_rank"] = peak_rss;
@@ -447,7 +467,12 @@ bool CrowdDistribution::all_ok(bool ok) { return ok; }
 bool CrowdDistribution::report_failures(const std::string&, const std::string& e) { return !e.empty(); }
 void CrowdDistribution::assign_walkers(Crowd&, double) {}
 std::vector<double> CrowdDistribution::all_gather(double value) { return {value}; }
-std::vector<std::uint8_t> CrowdDistribution::gather_to_root(std::span<const std::uint8_t> bytes) {
+std::vector<AgentObservation> CrowdDistribution::exchange_border_observations(std::span<const AgentObservation>, float) {
+  return {};
+}
+std::vector<std::uint8_t> CrowdDistribution::gather_to_root(std::span<const std::uint8_t> bytes,
+                                                            std::vector<std::size_t>* sizes) {
+  if (sizes) *sizes = {bytes.size()};
   return {bytes.begin(), bytes.end()};
 }
 void CrowdDistribution::share_bounds(glm::vec3&, glm::vec3&) {}

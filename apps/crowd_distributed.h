@@ -27,6 +27,7 @@
 
 namespace strata {
 
+struct AgentObservation;
 struct Crowd;
 class CrowdRenderer;
 class Profiler;
@@ -78,8 +79,12 @@ class CrowdDistribution {
   void assign_walkers(Crowd& crowd, double time_s);
   // Every rank's value, in rank order, on every rank.
   std::vector<double> all_gather(double value);
-  // Rank 0 receives every rank's bytes concatenated in rank order; the others get an empty vector.
-  std::vector<std::uint8_t> gather_to_root(std::span<const std::uint8_t> bytes);
+  // `strata report crowd`: sends every other rank this rank's observations within `reach` of its slab and returns
+  // the other ranks' near this one's (dist/agent_exchange.h pack_border_observations); collective, each step.
+  std::vector<AgentObservation> exchange_border_observations(std::span<const AgentObservation> mine, float reach);
+  // Rank 0 receives every rank's bytes concatenated in rank order (and, given `sizes`, each rank's count); the
+  // others get an empty vector.
+  std::vector<std::uint8_t> gather_to_root(std::span<const std::uint8_t> bytes, std::vector<std::size_t>* sizes = nullptr);
   // Every rank's bounds: lo the minimum, hi the maximum.
   void share_bounds(glm::vec3& lo, glm::vec3& hi);
   // The box of every rank's box: `any` false means this rank has none (lo, hi ignored). False when no rank has one.

@@ -5,16 +5,17 @@
 // Walkers are simulated without a body (--level -1 by default): the walk, IK and FK run for every walker, so foot
 // slide is measured on every one, and skinning, which the report does not measure, would only slow it.
 //
-// Under mpirun each rank steps its slab's agents (apps/crowd_distributed.h) and rank 0 observes every agent, so
-// the crowd's figures are one process's; foot slide is followed by each rank for the walkers it holds, and the
-// costs are the slowest rank's (each rank's in "mpi").
+// Under mpirun each rank steps its slab's agents (apps/crowd_distributed.h) and observes them, with the agents of
+// other ranks near its slab for the pairs across borders (scene/crowd_metrics.h); rank 0 merges every rank's
+// metrics at the end, so the crowd's figures are one process's while each step's traffic grows with the borders,
+// not the crowd. Foot slide is followed by each rank for the walkers it holds, and the costs are the slowest
+// rank's (each rank's in "mpi").
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cstdio>
-#include <cstring>
 #include <numeric>
 #include <memory>
 #include <string>
@@ -47,14 +48,18 @@ struct CrowdReportOptions {
   double mpi_timeout_seconds = 600.0;
 };
 
-// Under mpirun: every rank's agents' observations, gathered on rank 0 (28 bytes an agent a step, which grows with
-// the crowd: a report's price for figures equal to one process's, overlaps across borders included).
-std::vector<AgentObservation> gather_observations(CrowdDistribution& dist, const std::vector<AgentObservation>& mine) {
-  const std::vector<std::uint8_t> all = dist.gather_to_root(
-      std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(mine.data()), mine.size() * sizeof(AgentObservation)));
-  std::vector<AgentObservation> out(all.size() / sizeof(AgentObservation));
-  if (!out.empty()) std::memcpy(out.data(), all.data(), out.size() * sizeof(AgentObservation));
-  return out;
+// Under mpirun, at the end: every rank's metrics merged on rank 0 (a few bytes an agent, once).
+void merge_on_root(CrowdDistribution& dist, CrowdMetrics& metrics) {
+  const std::vector<std::uint8_t> mine = metrics.pack();
+  std::vector<std::size_t> sizes;
+  const std::vector<std::uint8_t> all = dist.gather_to_root(mine, &sizes);
+  if (!dist.root()) return;
+  // In rank order: rank 0's own come first and are already in `metrics`.
+  std::size_t at = sizes.empty() ? 0 : sizes[0];
+  for (std::size_t r = 1; r < sizes.size(); ++r) {
+    metrics.merge(std::span<const std::uint8_t>(all.data() + at, sizes[r]));
+    at += sizes[r];
+  }
 }
 
 double percentile(std::vector<double> v, double p) {
@@ -103,6 +108,10 @@ int run_crowd_report(const CrowdReportOptions& o) {
     auto frames = static_cast<std::size_t>(seconds * o.fps + 0.5);
     std::vector<double> avoidance_ms, navigation_ms;
     std::vector<AgentObservation> observed;
+    // Other ranks' agents that can pair with this rank's: within the pair reach plus two bodies of its slab, and
+    // a metre for how far an agent moves between the slab cut (at the step's start) and the observation.
+    const float border_reach = static_cast<float>(metrics.pair_reach_m()) +
+                               2.0f * (scenario.agents.radius + scene->agents->radius_margin) + 1.0f;
     std::vector<std::uint32_t> walker_ids;
     std::size_t done = 0;
     bool all_arrived = false;
@@ -117,8 +126,7 @@ int run_crowd_report(const CrowdReportOptions& o) {
       if (dist) {
         observed.clear();
         collect_agent_observations(*scene, observed);
-        const std::vector<AgentObservation> everyone = gather_observations(*dist, observed);
-        if (root) metrics.observe(everyone, dt);
+        metrics.observe(observed, dist->exchange_border_observations(observed, border_reach), dt);
       } else {
         metrics.observe(*scene, dt);
       }
@@ -143,6 +151,7 @@ int run_crowd_report(const CrowdReportOptions& o) {
         }
       }
     }
+    if (dist) merge_on_root(*dist, metrics);
     const CrowdMetricsReport r = metrics.report();
     GaitReport g = gait.report();
     double avoidance_mean = 0;

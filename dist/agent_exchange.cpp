@@ -11,6 +11,8 @@ namespace {
 
 // The wire form of a ghost: the entity index and eight floats, no padding.
 constexpr std::size_t kGhostBytes = 4 + 8 * 4;
+// Of a border observation: the entity index and three floats.
+constexpr std::size_t kObservationBytes = 4 + 3 * 4;
 // Of a plan offer: urgency and entity index.
 constexpr std::size_t kOfferBytes = 4 + 4;
 
@@ -62,6 +64,47 @@ void unpack_ghosts(std::span<const std::uint8_t> bytes, std::vector<AgentSnapsho
     }
     s.px = v[0], s.pz = v[1], s.vx = v[2], s.vz = v[3], s.pref_vx = v[4], s.pref_vz = v[5];
     s.radius = v[6], s.max_speed = v[7];
+  }
+}
+
+std::vector<std::vector<std::uint8_t>> pack_border_observations(std::span<const AgentObservation> mine,
+                                                                const CrowdPartition& partition, int rank, float reach) {
+  const int ranks = partition.ranks();
+  std::vector<std::vector<std::uint8_t>> to_rank(static_cast<std::size_t>(ranks));
+  for (int r = 0; r < ranks; ++r) {
+    if (r == rank) continue;
+    const OwnershipRegion region = partition.region(r);
+    std::vector<std::uint8_t>& out = to_rank[static_cast<std::size_t>(r)];
+    for (const AgentObservation& o : mine) {
+      const float c = region.axis == 0 ? o.x : o.z;
+      if (!(c >= region.lo - reach && c < region.hi + reach) || !std::isfinite(o.x + o.z + o.radius)) continue;
+      const float values[3] = {o.x, o.z, o.radius};
+      put(out, &o.walker, 4);
+      put(out, values, sizeof values);
+    }
+  }
+  return to_rank;
+}
+
+void unpack_border_observations(std::span<const std::uint8_t> bytes, std::vector<AgentObservation>& out) {
+  if (bytes.size() % kObservationBytes != 0)
+    throw std::runtime_error("unpack_border_observations: " + std::to_string(bytes.size()) +
+                             " bytes are not whole observations");
+  const std::size_t n = bytes.size() / kObservationBytes;
+  const std::size_t start = out.size();
+  out.resize(start + n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint8_t* p = bytes.data() + k * kObservationBytes;
+    AgentObservation& o = out[start + k];
+    float v[3];
+    std::memcpy(&o.walker, p, 4);
+    std::memcpy(v, p + 4, sizeof v);
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+      const std::uint32_t walker = o.walker;
+      out.resize(start);
+      throw std::runtime_error("unpack_border_observations: agent " + std::to_string(walker) + " has a non-finite value");
+    }
+    o.x = v[0], o.z = v[1], o.radius = v[2];
   }
 }
 

@@ -22,6 +22,7 @@
 
 #include "dist/partition.h"
 #include "scene/crowd_agents.h"
+#include "scene/crowd_metrics.h"
 
 namespace strata {
 
@@ -36,6 +37,15 @@ std::vector<std::vector<std::uint8_t>> pack_ghosts(std::span<const AgentSnapshot
 // Appends the agents in `bytes` (several packs may be concatenated) to `out`. Throws std::runtime_error for a
 // length that is not whole agents or a value avoidance would refuse (non-finite, radius <= 0), appending nothing.
 void unpack_ghosts(std::span<const std::uint8_t> bytes, std::vector<AgentSnapshot>& out);
+
+// `strata report crowd`: per rank, the bytes of those of `mine` within `reach` of that rank's slab (nothing for
+// `rank` itself), 16 bytes each (entity index, position, radius: what a pair's clearance needs). Agents with a
+// non-finite position or radius are not sent (the metrics leave them out of pairs anyway).
+std::vector<std::vector<std::uint8_t>> pack_border_observations(std::span<const AgentObservation> mine,
+                                                                const CrowdPartition& partition, int rank, float reach);
+// Appends the observations in `bytes` to `out` (index, position and radius; the rest zero). Throws
+// std::runtime_error for a length that is not whole observations or a non-finite value, appending nothing.
+void unpack_border_observations(std::span<const std::uint8_t> bytes, std::vector<AgentObservation>& out);
 
 // A process's plan offers: urgency and entity index of each candidate.
 std::vector<std::uint8_t> pack_plan_offers(std::span<const PlanCandidate> mine);

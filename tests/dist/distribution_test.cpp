@@ -297,6 +297,97 @@ TEST(AgentExchange, GhostsAreTheAgentsWithinReachOfAnotherSlab) {
   EXPECT_GT(ghost_reach(AvoidanceParameters{}), 2.0f * AvoidanceParameters{}.neighbor_distance);
 }
 
+// `strata report crowd` over ranks (scene/crowd_metrics.h): agents wandering over three slabs, often touching
+// across the cuts, changing owner as they cross, arriving, getting stuck, one of them NaN. Each "rank" observes
+// the agents it owns with the others' within reach of its slab (pack/unpack_border_observations, as the bytes
+// travel), rank 0 merges the packed metrics: every figure equals one observer's of the whole crowd. Without the
+// border observations the overlaps across the cuts are missed (the test can fail); malformed bytes are refused.
+TEST(CrowdMetricsOverRanks, PiecesMergeIntoOneObserversFigures) {
+  const int ranks = 3, agents = 240, frames = 60;
+  const float dt = 1.0f / 30.0f;
+  CrowdPartition partition;
+  partition.axis = 0;
+  partition.cuts = {-4.0f, 4.0f};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<AgentObservation> crowd(agents);
+  for (int a = 0; a < agents; ++a) {
+    AgentObservation& o = crowd[a];
+    o.walker = static_cast<std::uint32_t>(a * 3 + 1);  // sparse entity indices
+    // Pairs: the odd agent of each pair stands 0.5 m (an overlap of 0.1 m) from the even one, many across a cut.
+    o.x = a % 2 == 0 ? -12.0f + 24.0f * unit(rng) : crowd[a - 1].x + 0.5f;
+    o.z = a % 2 == 0 ? 10.0f * unit(rng) : crowd[a - 1].z;
+    o.radius = 0.3f;
+  }
+  for (int a = 0; a < agents; a += 7) crowd[a].x = (a % 2 ? -4.0f : 4.0f) - 0.25f;  // straddling the cuts
+  CrowdMetrics whole;
+  std::vector<CrowdMetrics> part(ranks), blind(ranks);
+  const float reach = static_cast<float>(whole.pair_reach_m()) + 2.0f * 0.3f + 1.0f;
+  std::vector<std::vector<AgentObservation>> owned(ranks);
+  for (int f = 0; f < frames; ++f) {
+    for (auto& o : owned) o.clear();
+    for (int a = 0; a < agents; ++a) {
+      AgentObservation& o = crowd[a];
+      const int owner = partition.owner(o.x, o.z);  // the cut made from where they stood before this step
+      o.x += (a % 2 ? 0.02f : 0.03f) * std::sin(0.1f * static_cast<float>(f + a));
+      o.z += 0.02f;
+      o.arrived = (a % 5 == 0 && f >= 20 + a % 30) ? 1u : 0u;
+      o.since_progress = (a % 11 == 0) ? dt * static_cast<float>(f) * 6.0f : 0.0f;  // stuck from frame 25 on
+      o.nonfinite = 0;
+      AgentObservation seen = o;
+      if (a == 37 && f == 30) seen.x = NAN, seen.nonfinite = 1;
+      owned[static_cast<std::size_t>(owner < 0 ? 0 : owner)].push_back(seen);
+    }
+    std::vector<AgentObservation> everyone;
+    for (const auto& o : owned) everyone.insert(everyone.end(), o.begin(), o.end());
+    whole.observe(everyone, dt);
+    std::vector<std::vector<std::uint8_t>> inbox(ranks);
+    for (int r = 0; r < ranks; ++r) {
+      const auto to_rank = pack_border_observations(owned[r], partition, r, reach);
+      for (int k = 0; k < ranks; ++k) inbox[k].insert(inbox[k].end(), to_rank[k].begin(), to_rank[k].end());
+    }
+    for (int r = 0; r < ranks; ++r) {
+      std::vector<AgentObservation> border;
+      unpack_border_observations(inbox[r], border);
+      part[r].observe(owned[r], border, dt);
+      blind[r].observe(owned[r], {}, dt);
+    }
+  }
+  const auto merged = [&](std::vector<CrowdMetrics>& pieces) {
+    for (int r = 1; r < ranks; ++r) pieces[0].merge(pieces[r].pack());
+    return pieces[0].report();
+  };
+  const CrowdMetricsReport a = whole.report(), b = merged(part), c = merged(blind);
+  EXPECT_GT(a.overlaps, 0u);
+  EXPECT_GT(a.stuck_agents, 0u);
+  EXPECT_GT(a.reached_goal_pct, 0.0);
+  EXPECT_EQ(a.nan_count, 1u);
+  EXPECT_EQ(b.agents, a.agents);
+  EXPECT_EQ(b.frames, a.frames);
+  EXPECT_EQ(b.overlaps, a.overlaps);
+  EXPECT_EQ(b.min_clearance_m, a.min_clearance_m);
+  EXPECT_EQ(b.reached_goal_pct, a.reached_goal_pct);
+  EXPECT_EQ(b.time_to_goal_mean_s, a.time_to_goal_mean_s);
+  EXPECT_EQ(b.time_to_goal_p95_s, a.time_to_goal_p95_s);
+  EXPECT_EQ(b.stuck_agents, a.stuck_agents);
+  EXPECT_EQ(b.nan_count, a.nan_count);
+  EXPECT_LT(c.overlaps, a.overlaps) << "pairs across the cuts need the border observations";
+
+  CrowdMetrics other;
+  EXPECT_THROW(other.merge(part[1].pack()), std::runtime_error) << "metrics of another number of steps";
+  std::vector<std::uint8_t> cut = part[1].pack();
+  cut.pop_back();
+  EXPECT_THROW(part[0].merge(cut), std::runtime_error);
+  std::vector<AgentObservation> out;
+  const std::vector<std::uint8_t> odd(17);
+  EXPECT_THROW(unpack_border_observations(odd, out), std::runtime_error);
+  std::vector<std::uint8_t> nan_bytes(16, 0);
+  const float nan = NAN;
+  std::memcpy(nan_bytes.data() + 4, &nan, 4);
+  EXPECT_THROW(unpack_border_observations(nan_bytes, out), std::runtime_error);
+  EXPECT_TRUE(out.empty());
+}
+
 TEST(AgentExchange, PlanBudgetGoesToTheWholeCrowdsMostUrgent) {
   // Three processes' offers; the crowd's three most urgent are walkers 7 (no path), then 2 and 4 (a three-way tie
   // at 2 s overdue, broken by the entity index: 2 < 4 < 9, so 9 waits).
