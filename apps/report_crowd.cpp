@@ -69,7 +69,7 @@ double percentile(std::vector<double> v, double p) {
 }
 
 int run_crowd_report(const CrowdReportOptions& o) {
-  // Under mpirun each rank steps the agents of its slab (apps/crowd_distributed.h); rank 0 observes them all.
+  // Under mpirun each rank steps and observes the agents of its slab (apps/crowd_distributed.h); rank 0 merges.
   bool join_failed = false;
   const std::unique_ptr<CrowdDistribution> dist =
       join_if_launched("report crowd", o.rebalance_seconds, o.mpi_timeout_seconds, join_failed);

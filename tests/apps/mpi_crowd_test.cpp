@@ -120,8 +120,9 @@ TEST(MpiCrowd, SteeredAgentsGiveOneProcesssState) {
   EXPECT_GT(ghosts, 0.0) << "agents met across borders, so the hash tested the ghosts";
   for (const auto& b : m.at("plan_offer_bytes_per_frame_per_rank")) EXPECT_GT(b.get<double>(), 0.0);
 
-  // `strata report crowd` over the same ranks: rank 0 observes every agent, so the crowd's figures (overlaps
-  // across borders included) are one process's; only the costs are per rank.
+  // `strata report crowd` over the same ranks: each rank observes its own agents with the others' near its borders,
+  // rank 0 merges, so the crowd's figures (overlaps across borders included) are one process's; only the costs are
+  // per rank.
   const std::string report = "report crowd --scenario crossing --walkers 48 --seconds 4 --json ";
   const CliResult alone = test::run_strata(report + (tmp / "one.json").string());
   ASSERT_EQ(alone.status, 0) << alone.out;
@@ -134,6 +135,9 @@ TEST(MpiCrowd, SteeredAgentsGiveOneProcesssState) {
                           "stuck_agents", "nan_count"})
     EXPECT_EQ(b.at(key), a.at(key)) << key;
   EXPECT_EQ(b.at("mpi").at("ranks"), 3);
+  double border = 0;
+  for (const auto& v : b.at("mpi").at("report_border_bytes_per_frame_per_rank")) border += v.get<double>();
+  EXPECT_GT(border, 0.0) << "agents met across the borders, so the figures tested the border observations";
   EXPECT_LT(b.at("foot_slide_mm_max").get<double>(), a.at("foot_slide_mm_max").get<double>() + 0.5)
       << "each rank follows its walkers' feet; a walker arriving from another rank starts at its next heel strike";
 }
