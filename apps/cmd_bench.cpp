@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -41,7 +42,11 @@ struct BenchOptions {
 // The crowd render pass (skinned bodies streamed every frame, one multi-draw per level) against the fastest way
 // to draw the same triangles: each level's mesh uploaded once and drawn with glDrawElementsInstanced, one copy per
 // walker at its position. Same target, material and camera; ground and skeletons off; each timed to glFinish.
-nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& context, CrowdRenderer& renderer) {
+// Under mpirun (`dist`) every rank does this for its own walkers, over the shared ground and shadow frustum as
+// `strata crowd` draws them, and each frame is then composited onto rank 0 (timed apart); `step_crowd` steps
+// the crowd as the timed frames did (walkers changing owner included). Collective: every rank calls it.
+nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& context, CrowdRenderer& renderer,
+                            CrowdDistribution* dist, const std::function<void(Profiler&)>& step_crowd) {
   renderer.options().quality = o.quality;
   renderer.options().backend = o.renderer;
   // High quality keeps the ground, and so does the ray tracer, whose lighting is always high quality.
@@ -51,25 +56,46 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& cont
   OrbitCamera camera;
   RenderScratch scratch;
   Profiler unused(1, false);
-  step(scene, 1.0f / o.fps, unused);
-  if (scene.skin.level.is_none() || (body_draw_inputs(scene).empty() && scene.table(DetailSlot::Impostor).size() == 0))
+  step_crowd(unused);
+  // Under mpirun a rank may hold no body at all (an empty slab): the check is the crowd's, over every rank.
+  const bool has_body = !scene.skin.level.is_none() &&
+                        (!body_draw_inputs(scene).empty() || scene.table(DetailSlot::Impostor).size() > 0);
+  const bool any_body = dist ? !dist->all_ok(!has_body) : has_body;
+  if (!any_body)
     throw std::runtime_error("--render needs a body (--level 0, 1, 2, auto, impostor or S1..S3)");
-  frame_crowd(scene, camera, aspect, scratch);
+  {
+    // The whole crowd framed (every rank's bounds, shared).
+    glm::vec3 lo, hi;
+    bool any = crowd_frame_bounds(scene, scratch, lo, hi);
+    if (dist) any = dist->share_box(any, lo, hi);
+    if (any) camera.frame_box_tight(lo, hi, aspect);
+  }
   set_crowd_camera(scene, camera, aspect, o.height);
+  RenderFrameOptions draw;
+  if (dist) draw.share_bounds = [&](glm::vec3& lo, glm::vec3& hi) { dist->share_bounds(lo, hi); };
+  std::vector<std::uint8_t> pixels;
+  double composite_s = 0.0;
   double crowd_s = 0.0, raw_s = 0.0;
   std::size_t crowd_triangles = 0, raw_triangles = 0, impostors = 0;
   std::vector<glm::vec3> offsets;
   for (std::size_t f = 0; f < std::min<std::size_t>(o.frames, 30); ++f) {
-    step(scene, 1.0f / o.fps, unused);
+    step_crowd(unused);
     renderer.finish();
     auto t0 = std::chrono::steady_clock::now();
-    render_frame(scene, renderer, camera, aspect, o.height, scratch);
+    render_frame(scene, renderer, camera, aspect, o.height, scratch, draw);
     renderer.finish();
     auto t1 = std::chrono::steady_clock::now();
     if (f > 0) {
       crowd_s += std::chrono::duration<double>(t1 - t0).count();
       crowd_triangles += renderer.triangles_drawn();
       impostors += renderer.impostors_drawn();
+    }
+    if (dist) {
+      // The frame's read-back and compositing (depth read, the wait for the slowest rank, the exchange).
+      t0 = std::chrono::steady_clock::now();
+      renderer.read_rgba(pixels);
+      dist->composite(renderer, pixels, o.width, o.height);
+      if (f > 0) composite_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     // The reference: per level, that level's mesh (the first skinned walker's, placed at the origin) instanced
     // at every walker of the level, which moves it as far as the walker went.
@@ -94,9 +120,9 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& cont
   Profiler passes(10, false);
   renderer.set_profiler(&passes);
   for (int f = 0; f < 10; ++f) {
-    step(scene, 1.0f / o.fps, unused);
+    step_crowd(unused);
     passes.begin_frame();
-    render_frame(scene, renderer, camera, aspect, o.height, scratch);
+    render_frame(scene, renderer, camera, aspect, o.height, scratch, draw);
     passes.end_frame();
   }
   renderer.set_profiler(nullptr);
@@ -118,6 +144,19 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& cont
   j["raw_ms_per_frame"] = 1000.0 * raw_s / double(std::max<std::size_t>(std::min<std::size_t>(o.frames, 30) - 1, 1));
   // Walkers drawn as impostors per frame (not part of the triangle rates: a quad each, from the atlas).
   j["impostors_per_frame"] = double(impostors) / double(std::max<std::size_t>(std::min<std::size_t>(o.frames, 30) - 1, 1));
+  if (dist) {
+    // This rank's figures above; every rank's here. A distributed frame costs its slowest rank's render pass and
+    // then the compositing.
+    const double timed = double(std::max<std::size_t>(std::min<std::size_t>(o.frames, 30) - 1, 1));
+    const std::vector<double> render_ms = dist->all_gather(j["crowd_ms_per_frame"].get<double>());
+    const std::vector<double> composite_ms = dist->all_gather(1000.0 * composite_s / timed);
+    const std::vector<double> triangles = dist->all_gather(double(crowd_triangles) / timed);
+    j["mpi"] = {{"render_ms_per_frame_per_rank", render_ms},
+                {"composite_ms_per_frame_per_rank", composite_ms},
+                {"triangles_per_frame_per_rank", triangles},
+                {"frame_ms", *std::max_element(render_ms.begin(), render_ms.end()) +
+                                 *std::max_element(composite_ms.begin(), composite_ms.end())}};
+  }
   return j;
 }
 
@@ -134,9 +173,9 @@ int run_bench(const BenchOptions& o) {
   if (root && !o.json.empty()) refusal.refuse_if(kExitFailure, check_output_file("--json", o.json));
   refusal.refuse_if(kExitFailure, check_crowd_memory(o.scene));
   if (o.render) refusal.refuse_if(kExitUsage, check_renderer_level(o.renderer, o.scene.level, false));
-  if (o.render && dist)
-    refusal.refuse_if(kExitUsage, "--render under mpirun: the render benchmark times one process's pass (strata "
-                                  "crowd composites a distributed frame)");
+  if (o.render && dist && o.renderer != RenderBackend::Gl)
+    refusal.refuse_if(kExitUsage,
+                      "--renderer embree: a distributed run composites depth, which only the GL renderer keeps");
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   std::unique_ptr<Crowd> built;
@@ -229,6 +268,9 @@ int run_bench(const BenchOptions& o) {
     // Under mpirun: frame_ms and systems are rank 0's; every rank's in "mpi" (the crowd's frame is its slowest
     // rank's: compute_ms_mean_per_rank).
     if (dist) j["mpi"] = dist->summary(frames);
+    // The render benchmark before the ranks part: under mpirun every rank renders its own walkers.
+    nlohmann::json render;
+    if (o.render && !stopped) render = render_bench(*scene, o, *context, *renderer, dist.get(), step_crowd);
     if (!root) return stopped ? interrupted_exit_code() : kExitOk;
     nlohmann::json systems = nlohmann::json::array();
     for (const SystemStats& s : profiler.stats())
@@ -236,7 +278,7 @@ int run_bench(const BenchOptions& o) {
                          {"max_ms", s.max_ms}});
     j["systems"] = systems;
     if (o.render && !stopped) {
-      const nlohmann::json r = render_bench(*scene, o, *context, *renderer);
+      const nlohmann::json& r = render;
       j["render"] = r;
       std::printf("render pass (%s, %dx%d): crowd %.3g triangles/s (%.1f ms/frame), raw instanced %.3g triangles/s "
                   "(%.1f ms/frame), ratio %.2f\n",

@@ -145,7 +145,8 @@ TEST(MpiCrowd, SteeredAgentsGiveOneProcesssState) {
 TEST(MpiCrowd, BenchTimesEveryRanksSlabAndOtherCommandsAreRefusedOnce) {
   const test::TempDir tmp("strata_mpi_test");
   const fs::path json = tmp / "bench.json";
-  const CliResult r = mpirun(2, "bench --walkers 10 --frames 20 --level 2 --json " + json.string());
+  const CliResult r =
+      mpirun(2, "bench --walkers 10 --frames 8 --level 2 --render --width 160 --height 90 --json " + json.string());
   ASSERT_EQ(r.status, 0) << r.out;
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
   EXPECT_EQ(j.at("walkers"), 10);
@@ -155,6 +156,15 @@ TEST(MpiCrowd, BenchTimesEveryRanksSlabAndOtherCommandsAreRefusedOnce) {
   for (const auto& w : m.at("walkers_per_rank")) walkers += w.get<double>();
   EXPECT_EQ(walkers, 10.0);
   for (const auto& ms : m.at("compute_ms_mean_per_rank")) EXPECT_GT(ms.get<double>(), 0.0);
+  // --render: each rank draws its own walkers, and the frames are composited.
+  const nlohmann::json& render = j.at("render").at("mpi");
+  ASSERT_EQ(render.at("render_ms_per_frame_per_rank").size(), 2u);
+  for (const auto& ms : render.at("render_ms_per_frame_per_rank")) EXPECT_GT(ms.get<double>(), 0.0);
+  for (const auto& ms : render.at("composite_ms_per_frame_per_rank")) EXPECT_GT(ms.get<double>(), 0.0);
+  for (const auto& t : render.at("triangles_per_frame_per_rank")) EXPECT_GT(t.get<double>(), 0.0) << "both ranks draw walkers";
+  const CliResult traced = mpirun(2, "bench --walkers 4 --frames 2 --level 2 --render --renderer embree");
+  EXPECT_EQ(traced.status, 2) << traced.out;
+  EXPECT_EQ(traced.out.find("--renderer embree"), traced.out.rfind("--renderer embree")) << "once: " << traced.out;
   // One line, exit 2, for a command that would run whole in every rank.
   const CliResult refused = mpirun(2, "report gait --json " + (tmp / "gait.json").string());
   EXPECT_EQ(refused.status, 2) << refused.out;
