@@ -203,8 +203,12 @@ void CrowdDistribution::assign_walkers(Crowd& crowd, double time_s) {
       }
       d.world.min_max(lo, hi);
       PlacementHistogram h = placement_histogram(xs, zs, lo[0], hi[0], lo[1], hi[1]);
-      d.world.sum(h.x);
-      d.world.sum(h.z);
+      // Both axes' counts in one reduction.
+      std::vector<std::uint32_t> counts(h.x.begin(), h.x.end());
+      counts.insert(counts.end(), h.z.begin(), h.z.end());
+      d.world.sum(counts);
+      std::copy(counts.begin(), counts.begin() + static_cast<std::ptrdiff_t>(h.x.size()), h.x.begin());
+      std::copy(counts.begin() + static_cast<std::ptrdiff_t>(h.x.size()), counts.end(), h.z.begin());
       d.recut_bytes += 4 * sizeof(float) + (h.x.size() + h.z.size()) * sizeof(std::uint32_t);
       d.partition = partition_from_histogram(h, ranks());
     } else {
