@@ -21,27 +21,39 @@ void put(std::vector<std::uint8_t>& out, const void* p, std::size_t n) {
   out.insert(out.end(), b, b + n);
 }
 
-}  // namespace
-
-float ghost_reach(const AvoidanceParameters& params) { return 2.0f * params.neighbor_distance + 1.0f; }
-
-std::vector<std::vector<std::uint8_t>> pack_ghosts(std::span<const AgentSnapshot> mine,
-                                                   const CrowdPartition& partition, int rank, float reach) {
+// Per rank but `rank`, the items whose position along the partition's axis (`x_of`, `z_of`) lies within `reach` of
+// that rank's slab, each appended by `write`. (A NaN position is within no reach.)
+template <class Item, class X, class Z, class Write>
+std::vector<std::vector<std::uint8_t>> pack_near_slabs(std::span<const Item> items, const CrowdPartition& partition,
+                                                       int rank, float reach, X x_of, Z z_of, Write write) {
   const int ranks = partition.ranks();
   std::vector<std::vector<std::uint8_t>> to_rank(static_cast<std::size_t>(ranks));
   for (int r = 0; r < ranks; ++r) {
     if (r == rank) continue;
     const OwnershipRegion region = partition.region(r);
     std::vector<std::uint8_t>& out = to_rank[static_cast<std::size_t>(r)];
-    for (const AgentSnapshot& s : mine) {
-      const float c = region.axis == 0 ? s.px : s.pz;
-      if (!(c >= region.lo - reach && c < region.hi + reach)) continue;
-      const float values[8] = {s.px, s.pz, s.vx, s.vz, s.pref_vx, s.pref_vz, s.radius, s.max_speed};
-      put(out, &s.walker, 4);
-      put(out, values, sizeof values);
+    for (const Item& item : items) {
+      const float c = region.axis == 0 ? x_of(item) : z_of(item);
+      if (c >= region.lo - reach && c < region.hi + reach) write(out, item);
     }
   }
   return to_rank;
+}
+
+}  // namespace
+
+float ghost_reach(const AvoidanceParameters& params) { return 2.0f * params.neighbor_distance + 1.0f; }
+
+std::vector<std::vector<std::uint8_t>> pack_ghosts(std::span<const AgentSnapshot> mine,
+                                                   const CrowdPartition& partition, int rank, float reach) {
+  return pack_near_slabs(
+      mine, partition, rank, reach, [](const AgentSnapshot& s) { return s.px; },
+      [](const AgentSnapshot& s) { return s.pz; },
+      [](std::vector<std::uint8_t>& out, const AgentSnapshot& s) {
+        const float values[8] = {s.px, s.pz, s.vx, s.vz, s.pref_vx, s.pref_vz, s.radius, s.max_speed};
+        put(out, &s.walker, 4);
+        put(out, values, sizeof values);
+      });
 }
 
 void unpack_ghosts(std::span<const std::uint8_t> bytes, std::vector<AgentSnapshot>& out) {
@@ -69,21 +81,15 @@ void unpack_ghosts(std::span<const std::uint8_t> bytes, std::vector<AgentSnapsho
 
 std::vector<std::vector<std::uint8_t>> pack_border_observations(std::span<const AgentObservation> mine,
                                                                 const CrowdPartition& partition, int rank, float reach) {
-  const int ranks = partition.ranks();
-  std::vector<std::vector<std::uint8_t>> to_rank(static_cast<std::size_t>(ranks));
-  for (int r = 0; r < ranks; ++r) {
-    if (r == rank) continue;
-    const OwnershipRegion region = partition.region(r);
-    std::vector<std::uint8_t>& out = to_rank[static_cast<std::size_t>(r)];
-    for (const AgentObservation& o : mine) {
-      const float c = region.axis == 0 ? o.x : o.z;
-      if (!(c >= region.lo - reach && c < region.hi + reach) || !std::isfinite(o.x + o.z + o.radius)) continue;
-      const float values[3] = {o.x, o.z, o.radius};
-      put(out, &o.walker, 4);
-      put(out, values, sizeof values);
-    }
-  }
-  return to_rank;
+  return pack_near_slabs(
+      mine, partition, rank, reach, [](const AgentObservation& o) { return o.x; },
+      [](const AgentObservation& o) { return o.z; },
+      [](std::vector<std::uint8_t>& out, const AgentObservation& o) {
+        if (!std::isfinite(o.x + o.z + o.radius)) return;
+        const float values[3] = {o.x, o.z, o.radius};
+        put(out, &o.walker, 4);
+        put(out, values, sizeof values);
+      });
 }
 
 void unpack_border_observations(std::span<const std::uint8_t> bytes, std::vector<AgentObservation>& out) {
