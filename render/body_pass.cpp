@@ -109,8 +109,14 @@ void BodyPass::draw_shadow(const BodySource& bodies, const ShadowPass& shadow) {
   glUseProgram(p);
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view_projection"), 1, GL_FALSE,
                             glm::value_ptr(shadow.light_view_projection()));
-  // Impostors cast no shadow: a card's depth from the sun is not the walker's silhouette seen from there.
-  for (std::size_t k = 0; k < n; ++k)
+  for (std::size_t k = 0; k < n; ++k) {
+    // Impostors as the atlas shows them from the sun (render/impostor_pass.h): a card facing the camera would cast
+    // a card's shadow, not the walker's.
+    if (const ImpostorBatch* imp = std::get_if<ImpostorBatch>(&batch_cache_[k]); imp && imp->walker_count > 0) {
+      if (!impostors_) impostors_ = std::make_unique<ImpostorPass>();
+      impostors_->draw_shadow(*imp, shadow);
+      continue;
+    }
     if (const BodyDrawInput* b = std::get_if<BodyDrawInput>(&batch_cache_[k]);
         b && b->walker_count > 0 && !b->triangles.empty()) {
       stream(*b, slots_[*slot[k]], slot_data_[*slot[k]]);
@@ -121,6 +127,7 @@ void BodyPass::draw_shadow(const BodySource& bodies, const ShadowPass& shadow) {
       bind_draw(*b);
       for (GLuint a = 3; a < 6; ++a) glEnableVertexArrayAttrib(vao_.id(), a);
     }
+  }
 }
 
 void BodyPass::draw(const BodySource& bodies, const glm::mat4& view, const glm::mat4& projection,

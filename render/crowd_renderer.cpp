@@ -16,6 +16,7 @@
 #include "profiling/profiler.h"
 #include "render/body_pass.h"
 #include "render/ground_pass.h"
+#include "render/impostor_pass.h"
 #include "render/props_pass.h"
 #include "render/reference_pass.h"
 #include "render/render_target.h"
@@ -117,6 +118,14 @@ void body_vertex_bounds(const BodySource& bodies, glm::vec3& lo, glm::vec3& hi) 
 // the bones): what the shadow frustum and the footprint grow the joints' box by.
 constexpr float kBodyReach = 0.35f;
 
+// [lo, hi] grown by every impostor batch's quads.
+void grow_by_impostor_batches(const BodySource& bodies, glm::vec3& lo, glm::vec3& hi) {
+  for (std::size_t k = 0; k < bodies.batch_count(); ++k) {
+    const BodyBatch batch = bodies.batch(k);
+    if (const ImpostorBatch* b = std::get_if<ImpostorBatch>(&batch)) grow_by_impostors(*b, lo, hi);
+  }
+}
+
 // The box of what a frame draws of walkers: the joints grown by a body's reach (or, for bodies without
 // skeletons, their vertices), and each impostor's quad (a sphere about the quad's centre holds it, whichever way
 // it turns to face the eye).
@@ -130,18 +139,7 @@ void walker_bounds(const SkeletonDrawInput& input, const BodySource& bodies, glm
   } else if (joints.empty()) {
     body_vertex_bounds(bodies, lo, hi);
   }
-  for (std::size_t k = 0; k < bodies.batch_count(); ++k) {
-    const BodyBatch batch = bodies.batch(k);
-    const ImpostorBatch* b = std::get_if<ImpostorBatch>(&batch);
-    if (!b || !b->atlas) continue;
-    const float radius = 0.5f * std::hypot(b->atlas->cell_width_m, b->atlas->cell_height_m);
-    for (std::size_t w = 0; w < b->walker_count; ++w) {
-      const float s = b->scale[w];
-      const glm::vec3 centre(b->x[w], b->y[w] + b->atlas->center_height_m * s, b->z[w]);
-      if (!std::isfinite(centre.x + centre.y + centre.z + s)) continue;
-      lo = glm::min(lo, centre - glm::vec3(radius * s)), hi = glm::max(hi, centre + glm::vec3(radius * s));
-    }
-  }
+  grow_by_impostor_batches(bodies, lo, hi);
 }
 
 }  // namespace
@@ -213,9 +211,13 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
     shaded.sun = &sun;
     shaded.eye = glm::vec3(glm::inverse(view)[3]);
     std::span<const glm::vec3> casters = drawn_joint_positions(input);
-    if (!input.shadow_fit_points.empty()) {
+    // Impostors cast shadows too (render/impostor_pass.h): the frustum holds their quads.
+    glm::vec3 imp_lo(std::numeric_limits<float>::max()), imp_hi(std::numeric_limits<float>::lowest());
+    grow_by_impostor_batches(bodies, imp_lo, imp_hi);
+    if (!input.shadow_fit_points.empty() || imp_lo.x <= imp_hi.x) {
       r.casters.assign(casters.begin(), casters.end());
       r.casters.insert(r.casters.end(), input.shadow_fit_points.begin(), input.shadow_fit_points.end());
+      if (imp_lo.x <= imp_hi.x) r.casters.insert(r.casters.end(), {imp_lo, imp_hi});
       casters = r.casters;
     }
     if (casters.empty()) {

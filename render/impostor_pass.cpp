@@ -1,5 +1,7 @@
 #include "render/impostor_pass.h"
 
+#include <glm/common.hpp>
+
 #include <epoxy/gl.h>
 
 #include <algorithm>
@@ -26,6 +28,17 @@ GlObject link_impostor_program(bool shaded) {
 }
 
 }  // namespace
+
+void grow_by_impostors(const ImpostorBatch& b, glm::vec3& lo, glm::vec3& hi) {
+  if (!b.atlas || b.walker_count == 0) return;
+  const float radius = 0.5f * std::hypot(b.atlas->cell_width_m, b.atlas->cell_height_m);
+  for (std::size_t w = 0; w < b.walker_count; ++w) {
+    const float s = b.scale[w];
+    const glm::vec3 centre(b.x[w], b.y[w] + b.atlas->center_height_m * s, b.z[w]);
+    if (!std::isfinite(centre.x + centre.y + centre.z + s)) continue;
+    lo = glm::min(lo, centre - glm::vec3(radius * s)), hi = glm::max(hi, centre + glm::vec3(radius * s));
+  }
+}
 
 ImpostorPass::ImpostorPass()
     : program_(link_impostor_program(false)),
@@ -100,9 +113,7 @@ void ImpostorPass::upload(const ImpostorAtlas& atlas) {
   uploaded_key_ = atlas.key;
 }
 
-void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm::mat4& projection,
-                        const glm::vec3& skin_color, const ShadedFrame* shading) {
-  if (b.walker_count == 0) return;
+void ImpostorPass::stream(const ImpostorBatch& b) {
   const ImpostorAtlas& atlas = *b.atlas;
   if (uploaded_ != &atlas || uploaded_key_ != atlas.key) upload(atlas);
   const GLuint vao = vao_.id();
@@ -113,24 +124,11 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
     glNamedBufferSubData(instances_.id(), a * bytes, bytes, arrays[a]);
     glVertexArrayVertexBuffer(vao, a, instances_.id(), a * bytes, sizeof(float));
   }
-  if (shading && !shaded_program_) shaded_program_ = link_impostor_program(true);
-  const GLuint p = shading ? shaded_program_.id() : program_.id();
+}
+
+void ImpostorPass::bind_atlas(GLuint p, const ImpostorAtlas& atlas, const glm::mat4& view, const glm::mat4& projection,
+                              const glm::vec3& eye) const {
   const ImpostorAtlasLayout& l = atlas.layout;
-  const glm::mat4 inverse_view = glm::inverse(view);
-  const glm::vec3 eye(inverse_view[3]);
-  if (shading) {
-    // Each walker's palette by its key, as the body pass does (render/appearance.h).
-    fill_palettes(b.walker_keys, b.walker_count, plain_palette(skin_color), palette_scratch_);
-    glNamedBufferData(palettes_.id(), static_cast<GLsizeiptr>(palette_scratch_.size() * sizeof(glm::vec4)),
-                      palette_scratch_.data(), GL_STREAM_DRAW);
-    glTextureBuffer(palettes_texture_.id(), GL_RGBA32F, palettes_.id());
-    glBindTextureUnit(2, palettes_texture_.id());
-    glProgramUniform1i(p, glGetUniformLocation(p, "u_palettes"), 2);
-    glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view_inverse"), 1, GL_FALSE, glm::value_ptr(inverse_view));
-    shading->apply(p);
-  } else {
-    glProgramUniform3fv(p, glGetUniformLocation(p, "u_skin_color"), 1, glm::value_ptr(skin_color));
-  }
   glUseProgram(p);
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view"), 1, GL_FALSE, glm::value_ptr(view));
   glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_projection"), 1, GL_FALSE, glm::value_ptr(projection));
@@ -145,7 +143,30 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, cell_bounds_.id());
   glBindTextureUnit(0, color_.id());
   glBindTextureUnit(1, normal_.id());
-  glBindVertexArray(vao);
+  glBindVertexArray(vao_.id());
+}
+
+void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm::mat4& projection,
+                        const glm::vec3& skin_color, const ShadedFrame* shading) {
+  if (b.walker_count == 0) return;
+  stream(b);
+  if (shading && !shaded_program_) shaded_program_ = link_impostor_program(true);
+  const GLuint p = shading ? shaded_program_.id() : program_.id();
+  const glm::mat4 inverse_view = glm::inverse(view);
+  if (shading) {
+    // Each walker's palette by its key, as the body pass does (render/appearance.h).
+    fill_palettes(b.walker_keys, b.walker_count, plain_palette(skin_color), palette_scratch_);
+    glNamedBufferData(palettes_.id(), static_cast<GLsizeiptr>(palette_scratch_.size() * sizeof(glm::vec4)),
+                      palette_scratch_.data(), GL_STREAM_DRAW);
+    glTextureBuffer(palettes_texture_.id(), GL_RGBA32F, palettes_.id());
+    glBindTextureUnit(2, palettes_texture_.id());
+    glProgramUniform1i(p, glGetUniformLocation(p, "u_palettes"), 2);
+    glProgramUniformMatrix4fv(p, glGetUniformLocation(p, "u_view_inverse"), 1, GL_FALSE, glm::value_ptr(inverse_view));
+    shading->apply(p);
+  } else {
+    glProgramUniform3fv(p, glGetUniformLocation(p, "u_skin_color"), 1, glm::value_ptr(skin_color));
+  }
+  bind_atlas(p, *b.atlas, view, projection, glm::vec3(inverse_view[3]));
   // Coverage from alpha; the alpha itself is kept out of the target (which stays opaque): written, it left
   // the edges' pixels translucent, and a PNG writer that un-premultiplies brightened them to white.
   glEnable(GL_SAMPLE_ALPHA_TO_COVERAGE);
@@ -158,6 +179,22 @@ void ImpostorPass::draw(const ImpostorBatch& b, const glm::mat4& view, const glm
   glBindTextureUnit(2, 0);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
   drawn_ += b.walker_count;
+}
+
+void ImpostorPass::draw_shadow(const ImpostorBatch& b, const ShadowPass& shadow) {
+  if (b.walker_count == 0) return;
+  stream(b);
+  if (!shadow_program_)
+    shadow_program_ = link_program("render/shaders/impostor.vert", shader_source("render/shaders/impostor.vert"),
+                                   "render/shaders/impostor_shadow.frag",
+                                   shader_source("render/shaders/impostor_shadow.frag"));
+  // The sun as the eye: far enough out that every walker sees it along the sun's rays (within 0.3 degrees for a
+  // crowd 500 m across), so each quad faces the sun as the orthographic map looks at it.
+  bind_atlas(shadow_program_.id(), *b.atlas, shadow.light_view(), shadow.light_projection(), shadow.far_sun_point());
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(b.walker_count));
+  glBindTextureUnit(0, 0);
+  glBindTextureUnit(1, 0);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
 }
 
 }  // namespace strata

@@ -10,6 +10,7 @@
 #include <glm/common.hpp>
 
 #include "render/impostor_bake.h"
+#include "render/impostor_pass.h"
 #include "rig/subdiv_topology.h"
 #include "rig/surface_material.h"
 #include "rig/vertex_occlusion.h"
@@ -235,14 +236,19 @@ std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamer
     impostor_feet(crowd, scratch.impostor_feet);
     skeletons.ground_points = scratch.impostor_feet;
   }
+  if (impostors) {
+    scratch.batches.assign(bodies.begin(), bodies.end());
+    scratch.batches.emplace_back(impostor_batch(crowd, &scratch.impostor_phase, &scratch.impostor_keys));
+  }
   if (options.share_bounds) {
     // The ground and the shadow frustum are fitted to boxes of their points (render/ground_pass.h ground_extent,
     // render/shadow_pass.h): this process's points plus the two corners of every process's box give every
-    // process that box.
+    // process that box. The shadow frustum's box holds the impostors' quads too (they cast shadows).
     const std::size_t joints = with_joints * crowd.rig().skeleton.joint_count();
     glm::vec3 lo, hi, feet_lo, feet_hi;
     joint_bounds(std::span<const glm::vec3>(scratch.joints.data(), std::min(joints, scratch.joints.size())), lo, hi);
     glm::vec3 joints_lo = lo, joints_hi = hi;
+    if (impostors) grow_by_impostors(std::get<ImpostorBatch>(scratch.batches.back()), joints_lo, joints_hi);
     options.share_bounds(joints_lo, joints_hi);
     scratch.shared_joints.clear();
     if (joints_lo.x <= joints_hi.x) scratch.shared_joints = {joints_lo, joints_hi};
@@ -255,8 +261,6 @@ std::size_t render_frame(Crowd& crowd, CrowdRenderer& renderer, const OrbitCamer
     skeletons.ground_points = scratch.shared_ground;
   }
   if (impostors) {
-    scratch.batches.assign(bodies.begin(), bodies.end());
-    scratch.batches.emplace_back(impostor_batch(crowd, &scratch.impostor_phase, &scratch.impostor_keys));
     renderer.render(skeletons, camera.view(), camera.projection(aspect), BodyBatches(scratch.batches));
   } else {
     renderer.render(skeletons, camera.view(), camera.projection(aspect), bodies);

@@ -71,6 +71,8 @@ bool ShadowPass::begin(const glm::vec3& to_sun, std::span<const glm::vec3> caste
   // Light space looks down -z: near and far are the negated z extremes.
   const glm::mat4 projection = glm::ortho(llo.x, lhi.x, llo.y, lhi.y, -lhi.z - 0.1f, -llo.z + 0.1f);
   view_projection_ = projection * view;
+  view_ = view, projection_ = projection;
+  far_sun_ = centre + to_sun * 1.0e5f;
   texel_world_ = std::max(lhi.x - llo.x, lhi.y - llo.y) / static_cast<float>(size_);
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_.id());
   glViewport(0, 0, size_, size_);

@@ -40,6 +40,11 @@ class ShadowPass {
   bool begin(const glm::vec3& to_sun, std::span<const glm::vec3> casters, float reach);
   // The light's world -> clip matrix of this frame (what the depth draws use).
   const glm::mat4& light_view_projection() const { return view_projection_; }
+  // Its two halves (the light's view, looking down -z at the frustum's centre, and its orthographic projection),
+  // and a point far out towards the sun (1e5 m) from which every caster is seen along the sun's rays.
+  const glm::mat4& light_view() const { return view_; }
+  const glm::mat4& light_projection() const { return projection_; }
+  const glm::vec3& far_sun_point() const { return far_sun_; }
   // One texel of this frame's map in metres: how far the filtered lookup spreads a shadow's edge.
   float texel_world() const { return texel_world_; }
   // The program that draws the bodies' three position arrays into the map (render/shaders/shadow.vert).
@@ -55,6 +60,8 @@ class ShadowPass {
   GlObject depth_, framebuffer_, body_program_;
   glm::mat4 view_projection_{1.0f};
   float texel_world_ = 0.01f;
+  glm::mat4 view_{1.0f}, projection_{1.0f};
+  glm::vec3 far_sun_{0.0f};
 };
 
 // What a RenderQuality::High frame shades with, handed to every pass that draws lit surfaces.
