@@ -52,6 +52,7 @@ enum LegComponent : std::uint32_t {
   kLegToX, kLegToY, kLegToZ, kLegToHeading,  // swing target: the next footprint
   kLegToDistance,                            // path distance of the swing target
   kLegPlantDistance,                         // path distance of the planted footprint
+  kLegEarlyLift,                             // agents: the leg phase an early swing left at (< 0: at toe-off)
   kLegFloats
 };
 inline constexpr std::uint32_t kGaitFloats = kGaitLegs + 2 * kLegFloats;

@@ -161,8 +161,10 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
         // of the toe tip and the heel above the ground (y = 0 here).
         const float psi_frac = l.gait[kGaitPhase * s + w] - 0.5f * static_cast<float>(leg);
         const float psi = psi_frac - std::floor(psi_frac);
-        const float sf = gp.stance_fraction();
-        const float sigma = sf < 1.0f ? (psi - sf) / (1.0f - sf) : 0.0f;
+        // An agent's early swing (locomotion.h GaitStyle::early_lift) progresses from where it left.
+        const float early = l.gait[(base + kLegEarlyLift) * s + w];
+        const float start = early >= 0.0f ? early : gp.stance_fraction();
+        const float sigma = start < 1.0f ? (psi - start) / (1.0f - start) : 0.0f;
         if (sigma > 0.2f && sigma < 0.8f)
           report_.swing_clearance_min_mm = std::min(report_.swing_clearance_min_mm, 1000.0 * std::min(tip.y, heel.y));
       }

@@ -277,8 +277,11 @@ void plant_foot(const GaitRef& g, int leg, const glm::vec3& position, float head
   g.leg(leg, kLegSwinging) = 0.0f;
 }
 
+// `early_lift`: the leg phase the swing leaves at when that is before toe-off (locomotion.h GaitStyle::early_lift);
+// negative for a swing leaving at toe-off, whose progress follows the stance fraction as the cadence changes.
 void begin_swing(const GaitRef& g, int leg, const glm::vec3& from, float from_heading, float from_pitch,
-                 const glm::vec3& to, float to_heading, float to_distance) {
+                 const glm::vec3& to, float to_heading, float to_distance, float early_lift = -1.0f) {
+  g.leg(leg, kLegEarlyLift) = early_lift;
   g.leg(leg, kLegFromX) = from.x;
   g.leg(leg, kLegFromY) = from.y;
   g.leg(leg, kLegFromZ) = from.z;
@@ -611,6 +614,11 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     return hip_hold_at(rig, pelvis_ahead(ahead), hip, leg, tau, scale);
   };
 
+  // The leg phase a swinging leg's swing progresses from: the stance fraction, or where an early lift left.
+  auto swing_start = [&](int leg) {
+    const float early = g.leg(leg, kLegEarlyLift);
+    return early >= 0.0f ? early : sf;
+  };
   // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
   AnklePose ankle[2];
   float toe_pitch[2] = {0.0f, 0.0f};
@@ -621,6 +629,25 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // Heel strike (the leg's phase wrapped): the swing target becomes the planted footprint.
       plant_foot(g, leg, {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)}, g.leg(leg, kLegToHeading),
                  g.leg(leg, kLegToDistance));
+    } else if (!swinging && psi < sf && source.agents() && lanes.ik_flags.components != 0 && style.early_lift > 0.0f &&
+               psi >= std::max(style.early_lift * sf, 0.505f) &&
+               (lanes.ik_flags.at(static_cast<std::uint32_t>(leg), i) & (kIkUnreachable | kIkLimitsInfeasible)) != 0u) {
+      // Agents: a rolling stance foot the leg could not reach last frame lifts now (GaitStyle::early_lift), from
+      // the pose it has (its heel risen for the pelvis as last placed), and lands at the usual heel strike. Not
+      // before the other foot is down (psi 0.5; with a margin), which the heel-strike test (psi < 0.5) also needs.
+      const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
+      const float tau = psi / sf;
+      float p = 0.0f;
+      const glm::vec3 last_root{lanes.root_translation.at(0, i), lanes.root_translation.at(1, i),
+                                lanes.root_translation.at(2, i)};
+      const HipHold hold =
+          hip_hold_at(rig, pelvis, hip_at_root(rig, pelvis_motion(style, phase), last_root, leg), leg, tau, scale);
+      const AnklePose from =
+          stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), tau, scale, style, &p, strike_pitch, &hold);
+      const float strike_in = (1.0f - psi) * gp.cycle_time;
+      const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
+      begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
+                  track.distance_at(strike_in, lead), psi);
     } else if (!swinging && psi >= sf) {
       // Toe-off: leave from the rolled stance pose; aim where the pelvis will be at heel strike plus the lead.
       const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
@@ -637,7 +664,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
       begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
                   track.distance_at(strike_in, lead));
-    } else if (swinging && source.agents() && psi < sf + style.retarget_until * (1.0f - sf)) {
+    } else if (swinging && source.agents() && psi < swing_start(leg) + style.retarget_until * (1.0f - swing_start(leg))) {
       // Agents: the swing foot re-aims at each frame's prediction through most of its swing, as a person adjusts a
       // step in flight. A target fixed at toe-off landed a turning walker's foot where the body would have been had
       // it gone straight, up to 1.4 m off its path by the end of that stance. The lane walk's predictions do not
@@ -711,6 +738,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   struct LegPath {
     bool swinging;
     float psi;
+    float start;      // swing: the leg phase its swing progresses from (swing_start)
     glm::vec3 plant;  // stance: the footprint; swing: the one it lands on
     float plant_heading;
     std::optional<Swing> swing;  // swing: the current arc; stance: the predicted next one
@@ -719,6 +747,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     LegPath& lp = legs[leg];
     lp.swinging = g.leg(leg, kLegSwinging) > 0.5f;
     lp.psi = frac(phase - 0.5f * static_cast<float>(leg));
+    lp.start = swing_start(leg);
     if (lp.swinging) {
       lp.plant = {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)};
       lp.plant_heading = g.leg(leg, kLegToHeading);
@@ -756,7 +785,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       const HipHold hold = hip_hold(leg, ahead, tau);
       return stance_pose(rig, leg, lp.plant, lp.plant_heading, tau, scale, style, foot_pitch, strike_pitch, &hold);
     }
-    const float sigma = sf < 1.0f ? std::clamp((psi - sf) / (1.0f - sf), 0.0f, 1.0f) : 1.0f;
+    const float start = lp.swinging ? lp.start : sf;
+    const float sigma = start < 1.0f ? std::clamp((psi - start) / (1.0f - start), 0.0f, 1.0f) : 1.0f;
     if (binds) *binds = sigma < kSwingFreeFrom || sigma >= kSwingBindsFrom;
     return lp.swing->at(sigma);
   };

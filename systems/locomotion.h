@@ -127,6 +127,10 @@ struct GaitStyle {
   // ending that stance sooner lifts the foot and sets it down under the body, where holding it dragged it along
   // the ground (issue 16: up to 0.5 m in the scenario reports).
   float stance_hurry = 3.0f;
+  // Agents: such a leg already past this fraction of its stance (its heel up, rolling onto the toes) lifts into
+  // its swing now rather than at toe-off: its toe tip was what dragged (0.3 m at worst in the crossing). The swing
+  // leaves from the pose the foot has and lands on time; 0 or above 1 turns it off.
+  float early_lift = 0.8f;
   // Agents: a swinging foot re-aims at the newest footprint prediction until this fraction of its swing.
   float retarget_until = 0.8f;
   // Lowest cadence of a walking agent (steps/min): at a crawl the gait formula's cadence falls to 40, slow motion;

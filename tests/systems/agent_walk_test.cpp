@@ -11,6 +11,7 @@
 #include <glm/vec2.hpp>
 
 #include "io/hanim_loader.h"
+#include "motion/gait.h"
 #include "scene/crowd.h"
 #include "scene/spawn.h"
 #include "systems/agent_move.h"
@@ -210,6 +211,61 @@ TEST(AgentWalk, AStanceLegOutOfReachHurriesItsStep) {
   const float normal = advance(plain.gait(kGaitPhase)), hurried = advance(pushed.gait(kGaitPhase));
   ASSERT_GT(normal, 0.0f);
   EXPECT_NEAR(hurried / normal, plain.crowd->motion.style.stance_hurry, 1e-3f);
+}
+
+// A rolling stance foot its leg could not reach in the last frame, once the other foot is down
+// (GaitStyle::early_lift), lifts into its swing at once, from where it is (the ankle moves no more than a frame's
+// swing), and lands at its next heel strike; the same walker told nothing keeps the foot planted until toe-off.
+TEST(AgentWalk, ARollingFootOutOfReachLiftsEarly) {
+  AgentWalker plain, pushed;
+  const LocomotionRig& rig = *plain.crowd->motion.locomotion;
+  const float dt = 1.0f / 60.0f;
+  const glm::vec2 forward(0.0f, 1.2f);
+  const auto leg_value = [](AgentWalker& w, int leg, LegComponent c) {
+    return w.gait(kGaitLegs + static_cast<std::uint32_t>(leg) * kLegFloats + c);
+  };
+  const auto psi_of = [](AgentWalker& w, int leg) {
+    const float p = w.gait(kGaitPhase) - 0.5f * static_cast<float>(leg);
+    return p - std::floor(p);
+  };
+  // Walk until a stance leg is in the window: past the other foot's heel strike and early_lift of its stance.
+  int leg = -1;
+  float sf = 0.0f;
+  for (int f = 0; f < 600 && leg < 0; ++f) {
+    plain.frame(forward, dt);
+    pushed.frame(forward, dt);
+    sf = gait_parameters(plain.gait(kGaitHeight), plain.gait(kGaitCadence)).stance_fraction();
+    for (int l = 0; l < 2; ++l) {
+      const float psi = psi_of(plain, l);
+      // Not on the window's first frame: the next frame must still be inside it for the lift to be seen.
+      if (f > 120 && leg_value(plain, l, kLegSwinging) < 0.5f && psi > plain.crowd->motion.style.early_lift * sf + 0.01f &&
+          psi > 0.52f && psi < sf - 0.03f)
+        leg = l;
+    }
+  }
+  ASSERT_GE(leg, 0) << "the walk reached a late stance";
+  ASSERT_EQ(plain.gait(kGaitPhase), pushed.gait(kGaitPhase));
+  const std::int32_t ankle = rig.limbs[leg == 0 ? kLeftLeg : kRightLeg].lower;
+  const glm::vec3 before = pushed.joint(ankle);
+  plain.frame(forward, dt);
+  pushed.frame(forward, dt, [&](SoaTable& t) {
+    t.u32(kWalkerIkFlags, static_cast<std::uint32_t>(leg))[0] = kIkUnreachable;
+  });
+  EXPECT_LT(leg_value(plain, leg, kLegSwinging), 0.5f) << "told nothing, the foot stays down";
+  ASSERT_GT(leg_value(pushed, leg, kLegSwinging), 0.5f) << "out of reach late in stance, the foot lifts";
+  const float lifted_at = leg_value(pushed, leg, kLegEarlyLift);
+  EXPECT_GT(lifted_at, 0.5f);
+  EXPECT_LT(lifted_at, sf);
+  EXPECT_LT(glm::length(pushed.joint(ankle) - before), 0.05f) << "it leaves from where it was";
+  // It lands at its next heel strike, and the walk goes on without NaN.
+  bool landed = false;
+  for (int f = 0; f < 120 && !landed; ++f) {
+    pushed.frame(forward, dt);
+    landed = leg_value(pushed, leg, kLegSwinging) < 0.5f;
+    if (landed) EXPECT_LT(psi_of(pushed, leg), 0.1f) << "landed at the heel strike";
+    for (std::uint32_t c = 0; c < kAgentFloats; ++c) ASSERT_TRUE(std::isfinite(pushed.agent(c)));
+  }
+  EXPECT_TRUE(landed);
 }
 
 TEST(AgentWalk, AgentMoveRefusesNonFiniteVelocities) {
