@@ -619,6 +619,23 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     const float early = g.leg(leg, kLegEarlyLift);
     return early >= 0.0f ? early : sf;
   };
+  // A stance leg leaving the ground at leg phase psi, its stance at tau: it leaves from the pose the foot has (its
+  // heel risen for the pelvis as last placed, see the end of this function, so the swing starts where the foot
+  // is) and aims where the pelvis will be at heel strike plus the lead. `early`: begin_swing's.
+  auto lift_off = [&](int leg, float psi, float tau, float pose_strike_pitch, float early) {
+    const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
+    float p = 0.0f;
+    const glm::vec3 last_root{lanes.root_translation.at(0, i), lanes.root_translation.at(1, i),
+                              lanes.root_translation.at(2, i)};
+    const HipHold hold =
+        hip_hold_at(rig, pelvis, hip_at_root(rig, pelvis_motion(style, phase), last_root, leg), leg, tau, scale);
+    const AnklePose from =
+        stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), tau, scale, style, &p, pose_strike_pitch, &hold);
+    const float strike_in = (1.0f - psi) * gp.cycle_time;
+    const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
+    begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
+                track.distance_at(strike_in, lead), early);
+  };
   // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
   AnklePose ankle[2];
   float toe_pitch[2] = {0.0f, 0.0f};
@@ -633,37 +650,12 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
                psi >= std::max(style.early_lift * sf, 0.505f) &&
                (lanes.ik_flags.at(static_cast<std::uint32_t>(leg), i) & (kIkUnreachable | kIkLimitsInfeasible)) != 0u) {
       // Agents: a rolling stance foot the leg could not reach last frame lifts now (GaitStyle::early_lift), from
-      // the pose it has (its heel risen for the pelvis as last placed), and lands at the usual heel strike. Not
-      // before the other foot is down (psi 0.5; with a margin), which the heel-strike test (psi < 0.5) also needs.
-      const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
-      const float tau = psi / sf;
-      float p = 0.0f;
-      const glm::vec3 last_root{lanes.root_translation.at(0, i), lanes.root_translation.at(1, i),
-                                lanes.root_translation.at(2, i)};
-      const HipHold hold =
-          hip_hold_at(rig, pelvis, hip_at_root(rig, pelvis_motion(style, phase), last_root, leg), leg, tau, scale);
-      const AnklePose from =
-          stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), tau, scale, style, &p, strike_pitch, &hold);
-      const float strike_in = (1.0f - psi) * gp.cycle_time;
-      const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
-      begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
-                  track.distance_at(strike_in, lead), psi);
+      // the pose it has, and lands at the usual heel strike. Not before the other foot is down (psi 0.5; with a
+      // margin), which the heel-strike test (psi < 0.5) also needs.
+      lift_off(leg, psi, psi / sf, strike_pitch, psi);
     } else if (!swinging && psi >= sf) {
       // Toe-off: leave from the rolled stance pose; aim where the pelvis will be at heel strike plus the lead.
-      const glm::vec3 plant{g.leg(leg, kLegPlantX), g.leg(leg, kLegPlantY), g.leg(leg, kLegPlantZ)};
-      float p = 0.0f;
-      // It leaves from the pose the foot had: its heel rose for the pelvis as last placed (see the end of this
-      // function), so the swing starts where the foot is.
-      const glm::vec3 last_root{lanes.root_translation.at(0, i), lanes.root_translation.at(1, i),
-                                lanes.root_translation.at(2, i)};
-      const HipHold hold =
-          hip_hold_at(rig, pelvis, hip_at_root(rig, pelvis_motion(style, phase), last_root, leg), leg, 1.0f, scale);
-      const AnklePose from =
-          stance_pose(rig, leg, plant, g.leg(leg, kLegPlantHeading), 1.0f, scale, style, &p, 0.0f, &hold);
-      const float strike_in = (1.0f - psi) * gp.cycle_time;
-      const Pose2 to = landing_footprint(rig, track, strike_in, lead, leg, scale, gp.stance_time);
-      begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
-                  track.distance_at(strike_in, lead));
+      lift_off(leg, psi, 1.0f, 0.0f, -1.0f);
     } else if (swinging && source.agents() && psi < swing_start(leg) + style.retarget_until * (1.0f - swing_start(leg))) {
       // Agents: the swing foot re-aims at each frame's prediction through most of its swing, as a person adjusts a
       // step in flight. A target fixed at toe-off landed a turning walker's foot where the body would have been had
