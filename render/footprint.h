@@ -22,9 +22,11 @@ struct PixelRect {
 // The pixels of a width x height frame drawn with `view_projection` that the box [lo, hi] can cover, grown by
 // `pad_px` on every side for rasterisation's rounding; with `to_sun` (towards the sun, y > 0) the box's shadow on
 // the ground plane y = 0 too (the box swept along the sun's rays down to the ground, so a shadow falling on
-// anything standing on the ground between them is inside). The whole frame when a corner is behind or too near
-// the eye, a value is not finite, or the sun is within about 3 degrees of the horizon (shadows reach too far to
-// bound usefully); empty when lo > hi.
+// anything standing on the ground between them is inside). Only what lies in front of the near plane counts (a
+// box reaching behind the camera is clipped there; nothing is drawn behind it). The whole frame when a value is
+// not finite or the sun is within about 3 degrees of the horizon (shadows reach too far to bound usefully); empty
+// when lo > hi or the box lies wholly behind the near plane. `view_projection` maps to GL's clip space (z in
+// [-w, w]).
 PixelRect screen_footprint(const glm::vec3& lo, const glm::vec3& hi, const glm::vec3* to_sun,
                            const glm::mat4& view_projection, int width, int height, int pad_px = 2);
 

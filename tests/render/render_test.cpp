@@ -14,6 +14,7 @@
 #include <iterator>
 #include <limits>
 #include <memory>
+#include <random>
 #include <set>
 #include <span>
 #include <stdexcept>
@@ -23,6 +24,7 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <tbb/global_control.h>
 #include <glm/mat4x4.hpp>
 #include <glm/vec4.hpp>
@@ -34,6 +36,7 @@
 #include "render/body_pass.h"
 #include "render/camera.h"
 #include "render/crowd_renderer.h"
+#include "render/footprint.h"
 #include "render/gl_context.h"
 #include "render/gl_context_glfw.h"
 #include "render/gl_program.h"
@@ -816,6 +819,50 @@ TEST(GroundExtent, CentresUnderThePointsAndReachesPastThem) {
 }
 
 // Every shader the passes load is embedded in the library (the program runs with no file beside it).
+// screen_footprint (render/footprint.h): every point of a box, and of the segment from it to its shadow on the
+// ground, that lies in front of the near plane projects inside the rectangle, for a camera outside the box and one
+// standing inside its extent (the box reaching behind it), where the rectangle is still not the whole frame.
+// Degenerate inputs: an empty box gives nothing, a NaN or a sun at the horizon the whole frame.
+TEST(ScreenFootprint, HoldsEveryVisiblePointOfTheBoxAndItsShadow) {
+  const int width = 320, height = 180;
+  const glm::vec3 to_sun = glm::normalize(glm::vec3(-0.6f, 0.6f, 0.4f));
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  struct Case {
+    glm::vec3 lo, hi, eye, target;
+  };
+  const Case cases[] = {
+      {{-2.0f, 0.0f, -3.0f}, {3.0f, 2.0f, 1.0f}, {0.0f, 4.0f, 14.0f}, {0.0f, 0.5f, 0.0f}},    // outside
+      {{-6.0f, 0.0f, -20.0f}, {6.0f, 1.0f, 6.0f}, {0.0f, 3.0f, 3.0f}, {4.0f, 0.0f, -10.0f}},  // above, inside its extent
+  };
+  for (const Case& c : cases) {
+    const glm::mat4 vp = glm::perspective(0.8f, float(width) / height, 0.1f, 500.0f) * glm::lookAt(c.eye, c.target, {0.0f, 1.0f, 0.0f});
+    for (const glm::vec3* sun : {static_cast<const glm::vec3*>(nullptr), &to_sun}) {
+      const PixelRect r = screen_footprint(c.lo, c.hi, sun, vp, width, height, 0);
+      ASSERT_FALSE(r.empty());
+      EXPECT_LT(double(r.x1 - r.x0) * (r.y1 - r.y0), 0.9 * width * height) << "a rectangle, not the whole frame";
+      std::size_t seen = 0;
+      for (int k = 0; k < 20000; ++k) {
+        glm::vec3 p = glm::mix(c.lo, c.hi, glm::vec3(unit(rng), unit(rng), unit(rng)));
+        if (sun) p -= *sun * (unit(rng) * p.y / sun->y);  // somewhere on its way down to its shadow
+        const glm::vec4 q = vp * glm::vec4(p, 1.0f);
+        if (q.z < -q.w) continue;  // behind the near plane: not drawn
+        const float x = (q.x / q.w + 1.0f) * 0.5f * width, y = (1.0f - q.y / q.w) * 0.5f * height;
+        if (x < 0.0f || y < 0.0f || x >= width || y >= height) continue;  // off screen
+        ++seen;
+        ASSERT_TRUE(r.contains(int(std::floor(x)), int(std::floor(y)))) << x << ", " << y;
+      }
+      EXPECT_GT(seen, 1000u);
+    }
+  }
+  const glm::mat4 vp = glm::perspective(0.8f, 1.0f, 0.1f, 100.0f) * glm::lookAt(glm::vec3(0, 2, 10), glm::vec3(0), glm::vec3(0, 1, 0));
+  EXPECT_TRUE(screen_footprint(glm::vec3(1.0f), glm::vec3(-1.0f), nullptr, vp, 64, 64).empty());
+  EXPECT_TRUE(screen_footprint({-1, 0, 20}, {1, 1, 30}, nullptr, vp, 64, 64).empty()) << "wholly behind the camera";
+  EXPECT_EQ(screen_footprint({NAN, 0, 0}, {1, 1, 1}, nullptr, vp, 64, 64), (PixelRect{0, 0, 64, 64}));
+  const glm::vec3 low_sun(1.0f, 0.01f, 0.0f);
+  EXPECT_EQ(screen_footprint({-1, 0, -1}, {1, 2, 1}, &low_sun, vp, 64, 64), (PixelRect{0, 0, 64, 64}));
+}
+
 TEST(Shaders, EveryPassShaderIsEmbedded) {
   for (const char* path : {"render/shaders/skeleton.vert", "render/shaders/lit.frag", "render/shaders/body.vert",
                            "render/shaders/ground.vert", "render/shaders/ground.frag"}) {
