@@ -10,7 +10,10 @@
 // Where the time goes (perf, callgrind): about 70 % of an agent's ~0.9 us is the neighbour search, the rest the
 // half-planes and the linear program. Since then the search takes each cell's distance as a row's plus a
 // column's, computed once per agent (2026-11-27, an idle VM, 5 repetitions each, builds alternated twice):
-// 10,000 agents, two threads, 5.18-5.25 -> 4.57-4.71 ms (mean), the same velocities bit for bit.
+// 10,000 agents, two threads, 5.18-5.25 -> 4.57-4.71 ms (mean), the same velocities bit for bit. Rejected, same
+// machine and method: the kept neighbours as a max-heap (the farthest on top, replaced and sifted down in log k
+// moves, sorted at the end) instead of keep_nearest's sorted list: 5.72-5.80 against 4.69-4.77 ms. perf names the
+// list's shift the search's hottest instruction, but with 12 kept most candidates exit at the first comparison.
 
 // The half-plane form used throughout: a constraint is {v : dot(v - point, normal) >= 0} with |normal| = 1, the
 // permitted side being where the normal points. The paper and RVO2 describe a line by a point and a direction
