@@ -492,16 +492,32 @@ bool agent_wants_to_stand(const ColumnView<const float>& agent, std::size_t i, c
   return v < style.stand_speed && pref < style.stand_speed;
 }
 
+// Whether IK could not bring leg `leg` of walker i to its goal in the last frame (the body pushed away from it).
+bool unreachable(const LocomotionColumns& lanes, int leg, std::size_t i) {
+  return (lanes.ik_flags.at(static_cast<std::uint32_t>(leg), i) & (kIkUnreachable | kIkLimitsInfeasible)) != 0u;
+}
+
+// Whether a stance leg at leg phase psi (stance fraction sf) that its leg cannot reach lifts early
+// (GaitStyle::early_lift): past that fraction of its stance, and after the other foot is down (psi 0.5; with a
+// margin, which the heel-strike test, psi < 0.5, also needs).
+bool lifts_early(float psi, float sf, const GaitStyle& style) {
+  return style.early_lift > 0.0f && psi < sf && psi >= std::max(style.early_lift * sf, 0.505f);
+}
+
 void walk_one(const LocomotionRig& rig, const TrackSource& source, const LocomotionColumns& lanes, std::size_t i,
               float dt, const GaitStyle& base_style) {
   GaitRef g{lanes.gait.base, lanes.gait.stride, i};
-  // Agents: a stance leg IK could not bring to its planted foot last frame ends its stance sooner (stance_hurry).
+  // Agents: a stance leg IK could not bring to its planted foot last frame ends its stance sooner (stance_hurry),
+  // unless it lifts early this frame anyway (its stance fraction read before the clock moves, which may shift it
+  // slightly): hurried as well, the lifting foot moved 7.5 cm in its first frame at 60 fps.
   float hurry = 1.0f;
-  if (source.agents() && lanes.ik_flags.components != 0)
+  if (source.agents() && lanes.ik_flags.components != 0) {
+    const float sf_before = current_gait(g).stance_fraction();
     for (int leg = 0; leg < 2; ++leg)
-      if (g.leg(leg, kLegSwinging) < 0.5f &&
-          (lanes.ik_flags.at(static_cast<std::uint32_t>(leg), i) & (kIkUnreachable | kIkLimitsInfeasible)) != 0u)
+      if (g.leg(leg, kLegSwinging) < 0.5f && unreachable(lanes, leg, i) &&
+          !lifts_early(frac(g[kGaitPhase] - 0.5f * static_cast<float>(leg)), sf_before, base_style))
         hurry = base_style.stance_hurry;
+  }
   const GaitClock clock =
       advance_gait_clock(rig, source, g, lanes.time.at(0, i), lanes.placement, i, dt, base_style, hurry);
   // An agent stepping slower than its cadence's speed rolls off its toes less: a full 63-degree toe-off under a
@@ -646,12 +662,10 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // Heel strike (the leg's phase wrapped): the swing target becomes the planted footprint.
       plant_foot(g, leg, {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)}, g.leg(leg, kLegToHeading),
                  g.leg(leg, kLegToDistance));
-    } else if (!swinging && psi < sf && source.agents() && lanes.ik_flags.components != 0 && style.early_lift > 0.0f &&
-               psi >= std::max(style.early_lift * sf, 0.505f) &&
-               (lanes.ik_flags.at(static_cast<std::uint32_t>(leg), i) & (kIkUnreachable | kIkLimitsInfeasible)) != 0u) {
+    } else if (!swinging && source.agents() && lanes.ik_flags.components != 0 && unreachable(lanes, leg, i) &&
+               lifts_early(psi, sf, style)) {
       // Agents: a rolling stance foot the leg could not reach last frame lifts now (GaitStyle::early_lift), from
-      // the pose it has, and lands at the usual heel strike. Not before the other foot is down (psi 0.5; with a
-      // margin), which the heel-strike test (psi < 0.5) also needs.
+      // the pose it has, and lands at the usual heel strike.
       lift_off(leg, psi, psi / sf, strike_pitch, psi);
     } else if (!swinging && psi >= sf) {
       // Toe-off: leave from the rolled stance pose; aim where the pelvis will be at heel strike plus the lead.

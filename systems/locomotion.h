@@ -125,8 +125,11 @@ struct GaitStyle {
   // Agents: how much faster the gait phase runs while a stance leg's goal was out of IK's reach in the last frame.
   // Avoidance moves a body sideways in a jam further than a planted foot's leg reaches before its stance ends;
   // ending that stance sooner lifts the foot and sets it down under the body, where holding it dragged it along
-  // the ground (issue 16: up to 0.5 m in the scenario reports).
-  float stance_hurry = 3.0f;
+  // the ground (issue 16: up to 0.5 m in the scenario reports). 3 before the early lift below; with it, 6, and a leg
+  // lifting early is not hurried too (largest foot slide, 3 with the lift hurried -> 6 without: crossing 210 -> 162
+  // mm, bottleneck 187 -> 153, plaza 296 -> 158, but circle 218 -> 307); 10 made the steps jump a third of a cycle a
+  // frame at 30 fps.
+  float stance_hurry = 6.0f;
   // Agents: such a leg already past this fraction of its stance (its heel up, rolling onto the toes) lifts into
   // its swing now rather than at toe-off: its toe tip was what dragged (0.3 m at worst in the crossing). The swing
   // leaves from the pose the foot has and lands on time; 0 or above 1 turns it off.

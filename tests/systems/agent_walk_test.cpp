@@ -262,7 +262,9 @@ TEST(AgentWalk, ARollingFootOutOfReachLiftsEarly) {
   for (int f = 0; f < 120 && !landed; ++f) {
     pushed.frame(forward, dt);
     landed = leg_value(pushed, leg, kLegSwinging) < 0.5f;
-    if (landed) EXPECT_LT(psi_of(pushed, leg), 0.1f) << "landed at the heel strike";
+    if (landed) {
+      EXPECT_LT(psi_of(pushed, leg), 0.1f) << "landed at the heel strike";
+    }
     for (std::uint32_t c = 0; c < kAgentFloats; ++c) ASSERT_TRUE(std::isfinite(pushed.agent(c)));
   }
   EXPECT_TRUE(landed);
