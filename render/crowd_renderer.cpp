@@ -23,6 +23,7 @@
 #include "render/ray_tracer.h"
 #include "render/shadow_pass.h"
 #include "render/skeleton_pass.h"
+#include "systems/pose_gather.h"
 
 namespace strata {
 
@@ -127,19 +128,16 @@ void grow_by_impostor_batches(const BodySource& bodies, glm::vec3& lo, glm::vec3
 }
 
 // The box of what a frame draws of walkers: the joints grown by a body's reach (or, for bodies without
-// skeletons, their vertices), and each impostor's quad (a sphere about the quad's centre holds it, whichever way
-// it turns to face the eye).
-void walker_bounds(const SkeletonDrawInput& input, const BodySource& bodies, glm::vec3& lo, glm::vec3& hi) {
-  lo = glm::vec3(std::numeric_limits<float>::max()), hi = glm::vec3(std::numeric_limits<float>::lowest());
+// skeletons, their vertices), and `impostors`, the impostors' quads (grow_by_impostor_batches).
+void walker_bounds(const SkeletonDrawInput& input, const BodySource& bodies, const glm::vec3& impostors_lo,
+                   const glm::vec3& impostors_hi, glm::vec3& lo, glm::vec3& hi) {
   const std::span<const glm::vec3> joints = drawn_joint_positions(input);
-  for (const glm::vec3& p : joints)
-    if (std::isfinite(p.x + p.y + p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
-  if (lo.x <= hi.x) {
+  if (joint_bounds(joints, lo, hi)) {
     lo -= glm::vec3(kBodyReach), hi += glm::vec3(kBodyReach);
   } else if (joints.empty()) {
     body_vertex_bounds(bodies, lo, hi);
   }
-  grow_by_impostor_batches(bodies, lo, hi);
+  lo = glm::min(lo, impostors_lo), hi = glm::max(hi, impostors_hi);
 }
 
 }  // namespace
@@ -197,6 +195,9 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
   check_skeleton_input(input);
   const RenderOptions& o = r.options;
   PassTimer timer(r.profiler);
+  // The impostors' quads: the shadow frustum holds them, and so does the frame's footprint.
+  glm::vec3 imp_lo(std::numeric_limits<float>::max()), imp_hi(std::numeric_limits<float>::lowest());
+  grow_by_impostor_batches(bodies, imp_lo, imp_hi);
   // RenderQuality::High: the sun's shadow map first, from the bodies' vertices as this frame streams them (the
   // colour pass below draws from the same buffers) and the props; its frustum fits the joints, grown by how far
   // a body reaches past them.
@@ -212,8 +213,6 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
     shaded.eye = glm::vec3(glm::inverse(view)[3]);
     std::span<const glm::vec3> casters = drawn_joint_positions(input);
     // Impostors cast shadows too (render/impostor_pass.h): the frustum holds their quads.
-    glm::vec3 imp_lo(std::numeric_limits<float>::max()), imp_hi(std::numeric_limits<float>::lowest());
-    grow_by_impostor_batches(bodies, imp_lo, imp_hi);
     if (!input.shadow_fit_points.empty() || imp_lo.x <= imp_hi.x) {
       r.casters.assign(casters.begin(), casters.end());
       r.casters.insert(r.casters.end(), input.shadow_fit_points.begin(), input.shadow_fit_points.end());
@@ -250,7 +249,7 @@ void CrowdRenderer::render(const SkeletonDrawInput& input, const glm::mat4& view
   r.target.resolve();
   timer.stop();
   glm::vec3 lo, hi;
-  walker_bounds(input, bodies, lo, hi);
+  walker_bounds(input, bodies, imp_lo, imp_hi, lo, hi);
   if (shaded.shadows) {
     // The filtered lookup and its normal offset spread a shadow's edge by about two and a half texels.
     const float spread = 3.0f * r.shadow->texel_world();
