@@ -63,13 +63,7 @@ nlohmann::json render_bench(Crowd& scene, const BenchOptions& o, GlContext& cont
   const bool any_body = dist ? !dist->all_ok(!has_body) : has_body;
   if (!any_body)
     throw std::runtime_error("--render needs a body (--level 0, 1, 2, auto, impostor or S1..S3)");
-  {
-    // The whole crowd framed (every rank's bounds, shared).
-    glm::vec3 lo, hi;
-    bool any = crowd_frame_bounds(scene, scratch, lo, hi);
-    if (dist) any = dist->share_box(any, lo, hi);
-    if (any) camera.frame_box_tight(lo, hi, aspect);
-  }
+  frame_whole_crowd(scene, camera, aspect, scratch, dist);  // every rank's bounds, shared
   set_crowd_camera(scene, camera, aspect, o.height);
   RenderFrameOptions draw;
   if (dist) draw.share_bounds = [&](glm::vec3& lo, glm::vec3& hi) { dist->share_bounds(lo, hi); };
@@ -174,8 +168,7 @@ int run_bench(const BenchOptions& o) {
   refusal.refuse_if(kExitFailure, check_crowd_memory(o.scene));
   if (o.render) refusal.refuse_if(kExitUsage, check_renderer_level(o.renderer, o.scene.level, false));
   if (o.render && dist && o.renderer != RenderBackend::Gl)
-    refusal.refuse_if(kExitUsage,
-                      "--renderer embree: a distributed run composites depth, which only the GL renderer keeps");
+    refusal.refuse_if(kExitUsage, kDistributedRendererRefusal);
   const int threads = thread_count(o.scene);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   std::unique_ptr<Crowd> built;
@@ -219,16 +212,10 @@ int run_bench(const BenchOptions& o) {
       // A walking crowd under --level auto starts as impostors: framed from their feet before the first step.
       const bool framed_first = scene->table(DetailSlot::Impostor).size() > 0;
       // Under mpirun the camera frames the whole crowd: every rank's bounds, shared.
-      const auto frame_all = [&]() {
-        glm::vec3 lo, hi;
-        bool any = crowd_frame_bounds(*scene, scratch, lo, hi);
-        if (dist) any = dist->share_box(any, lo, hi);
-        if (any) camera.frame_box_tight(lo, hi, aspect);
-        return any;
-      };
-      if (framed_first && frame_all()) set_crowd_camera(*scene, camera, aspect, o.height);
+      if (framed_first && frame_whole_crowd(*scene, camera, aspect, scratch, dist.get()))
+        set_crowd_camera(*scene, camera, aspect, o.height);
       step_crowd(warmup);
-      frame_all();
+      frame_whole_crowd(*scene, camera, aspect, scratch, dist.get());
       set_crowd_camera(*scene, camera, aspect, o.height);
     }
     for (int f = 1; f < 3; ++f) step_crowd(warmup);

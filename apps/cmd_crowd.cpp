@@ -90,8 +90,7 @@ int run_crowd(const CrowdOptions& o) {
   if (root) refusal.refuse_if(kExitFailure, check_output_dir("--out", out));
   refusal.refuse_if(kExitUsage, check_renderer_level(o.renderer, o.scene.level, o.skeleton_overlay));
   if (dist && o.renderer != RenderBackend::Gl)
-    refusal.refuse_if(kExitUsage,
-                      "--renderer embree: a distributed run composites depth, which only the GL renderer keeps");
+    refusal.refuse_if(kExitUsage, kDistributedRendererRefusal);
   if (refusal.none()) refusal.refuse_if(kExitFailure, check_crowd_memory(o.scene));
   const int threads = thread_count(o.scene);
   tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));

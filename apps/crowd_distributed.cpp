@@ -24,7 +24,9 @@
 #include "dist/migration.h"
 #include "dist/partition.h"
 #include "profiling/profiler.h"
+#include "render/camera.h"
 #include "render/crowd_renderer.h"
+#include "render/scene_draw.h"
 #include "scene/crowd.h"
 #include "scene/crowd_agents.h"
 #include "scene/crowd_metrics.h"
@@ -47,6 +49,15 @@ std::unique_ptr<CrowdDistribution> join_if_launched(const char* command, double 
     failed = true;
     return nullptr;
   }
+}
+
+bool frame_whole_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderScratch& scratch,
+                       CrowdDistribution* dist) {
+  glm::vec3 lo, hi;
+  bool any = crowd_frame_bounds(crowd, scratch, lo, hi);
+  if (dist) any = dist->share_box(any, lo, hi);
+  if (any) camera.frame_box_tight(lo, hi, aspect);
+  return any;
 }
 
 bool Refusal::stop(const char* command, CrowdDistribution* dist) const {

@@ -30,7 +30,9 @@ namespace strata {
 struct AgentObservation;
 struct Crowd;
 class CrowdRenderer;
+struct OrbitCamera;
 class Profiler;
+struct RenderScratch;
 
 class CrowdDistribution;
 
@@ -38,6 +40,16 @@ class CrowdDistribution;
 // When joining fails, prints the command's one line and sets `failed`.
 std::unique_ptr<CrowdDistribution> join_if_launched(const char* command, double rebalance_seconds,
                                                     double timeout_seconds, bool& failed);
+
+// What a distributed command answers --renderer embree with: the ray tracer keeps no depth to composite.
+inline constexpr const char* kDistributedRendererRefusal =
+    "--renderer embree: a distributed run composites depth, which only the GL renderer keeps";
+
+// Frames `camera` on the whole crowd (crowd_frame_bounds, tightly): under mpirun (`dist` not null) every rank's
+// bounds, shared, so every rank gets the same camera. Collective then. False, camera untouched, when no rank has
+// anything to frame.
+bool frame_whole_crowd(const Crowd& crowd, OrbitCamera& camera, float aspect, RenderScratch& scratch,
+                       CrowdDistribution* dist);
 
 // A command's checks before any work: the first refusal is kept with its exit code, and stop() ends the command
 // when there is one — under mpirun agreed between the ranks first and printed once, so that every rank leaves
