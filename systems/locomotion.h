@@ -64,23 +64,29 @@ struct GaitStyle {
   // The pelvis height follows parabolas of this curvature (m/s^2) through the lowest heights the last and the
   // next heel strike allow, so the bob is smooth; hard reach limits alone gave ~1 cm/frame kinks.
   // 1.0 kept the pelvis ~4 cm low through mid-stance (knee 25-30 deg); 4-15 followed the legs' limits closer
-  // (knee RMS 0.5-1 deg lower) but shook the pelvis 1.5x harder in steady walking.
-  float bob_curvature = 1.8f;
+  // (knee RMS 0.5-1 deg lower) but shook the pelvis 1.5x harder in steady walking. 2.7 (was 1.8) came out of the
+  // joint search of 2026-11-27 (heel_off, heel_rise_end_slope, heel_hold_height below; docs/motion.md): the
+  // pelvis follows the double-support dip closer, excursion 2.6 -> 3.3 cm at 1.2 m/s, 2.1 -> 2.6 cm at 0.8.
+  float bob_curvature = 2.7f;
   // Footprint placed this many step lengths ahead of the pelvis at heel strike. With the heel rise below it
   // balances the leading leg at heel strike against the trailing one at toe-off: measured pelvis bob peak to
   // peak 2.2 / 5.9 / 10.7 cm at 0.8 / 1.2 / 1.6 m/s (0.5 gave 10 cm and 0.65 gave 7.8 cm at 1.2 m/s).
   // Now 0.53 with the heel and toe rockers and the straight rest leg (issue 21; searched with the stance values
   // below, 0.5-0.56): 0.6 put the foot 0.35 m ahead of the hip at heel strike, a 7 cm dip and the hip flexed 40 deg.
   float footprint_lead = 0.53f;
-  // Fraction of stance at which the heel starts to rise at the latest (~37 % of the cycle); it rises sooner when
-  // the body's progress needs it (heel_hold_from).
-  float heel_off = 0.59f;
+  // Fraction of stance at which the heel starts to rise at the latest (~34 % of the cycle); it rises sooner when
+  // the body's progress needs it (heel_hold_from). 0.55 (was 0.59): the earlier roll carries the trailing hip
+  // less far back (hip minimum -26.2 -> -23.7 deg at 1.2 m/s, -27.3 -> -24.1 at 1.3) and straightens the fast
+  // walkers' terminal stance (14.8 -> 8.7 deg at 1.8 m/s), for 0.4 deg more knee RMS. Later (0.7) followed the
+  // subject's pre-swing knee exactly (knee RMS 5.8) but left the hip at -28.8: the foot then stays where the
+  // rest ankle's 7 cm behind the hip puts every footprint (footprint() places the rest ankle `lead` ahead).
+  float heel_off = 0.55f;
   // From this fraction of stance (~28 % of the cycle) the heel rises as soon and as fast as the hip moving on ahead
   // needs to keep the stance knee at the subject's angle (systems/locomotion.cpp stance_pose), for the pelvis
   // as placed; the look-ahead assumes the pelvis heel_hold_height above rest. A schedule alone (heel_off and the
   // pitch curve below) left the trailing knee bent 15-35 deg in terminal stance, where the subject's is 4-7.
   float heel_hold_from = 0.45f;
-  float heel_hold_height = 0.005f;
+  float heel_hold_height = 0.015f;  // 0.005 before the joint search (bob_curvature)
   // Heel strike: the foot lands toes up by heel_strike_pitch and rolls down about its heel until foot flat at
   // heel_rocker of the stance (~8 % of the cycle), so the ankle is near neutral at heel strike as in a gait lab;
   // a foot landing flat left the ankle ~15 deg plantarflexed under a shin still leaning back. 0.36 (21 deg) lands
@@ -96,8 +102,9 @@ struct GaitStyle {
   // the pelvis could not anticipate when the cadence changed (1.7 cm/frame^2 jolts); 0.85 rounds it (and the
   // subject's foot turns fastest there too: ankle RMS 11.6 -> 10.5 deg). It applies in full from 110 steps/min
   // and fades out below 90: a slow walker's heel then rose too late, the pelvis sank in double support and the
-  // knee landed 11 deg bent at 0.8 m/s (3 deg without). 0.7 with the heel hold.
-  float heel_rise_end_slope = 0.7f;
+  // knee landed 11 deg bent at 0.8 m/s (3 deg without). 0.7 with the heel hold; 0.85 from the joint search
+  // (bob_curvature), with which the 1.63 m walker at 0.8 m/s lands its knee 7.8 deg bent (was 10.3).
+  float heel_rise_end_slope = 0.85f;
   // The swing follows the normative swing's joint angles (kSwingHipDeg... below); its knots in
   // the middle of the swing are raised where the toe tip or heel would pass lower than this above the ground
   // (swing_clearance_min_mm in the gait report: 13 mm with 0.025; 0.035 gave 21 mm but folded the knee 2 deg
