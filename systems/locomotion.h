@@ -9,11 +9,11 @@
 // lowest in double support (the pelvis is as high as both legs reach with the stance knee at a normative walk's
 // stance angles, kStanceKneeDeg, through loading response and mid-stance, so the knee yields and re-extends as a
 // person's), plus a small loading-response drop after each heel strike; lateral sway towards the stance leg;
-// pelvic rotation about the vertical (+-4 deg) and tilt (list, the swing side drops +-4 deg, and the subject's
-// backward tilt); stance with three rockers: heel strike toes up rolling down about the heel, a flat foot, then a
-// heel rise onto the ball (the midtarsal joint keeping the toes on the ground) and, once the toes bend no further,
-// about the toe tip, as soon as the hip moving on needs it to keep the stance knee at the normative angle; a
-// swing whose ankle and foot follow a normative swing's joint angles (kSwingHipDeg...) on the walker's own legs,
+// pelvic rotation about the vertical (+-4 deg) and tilt (list, the swing side drops +-4 deg, lagging towards the next
+// heel strike, and the subject's backward tilt); stance with three rockers: heel strike toes up rolling down
+// about the heel, a flat foot, then a heel rise onto the ball (the midtarsal joint keeping the toes on the
+// ground) and, once the toes bend no further, about the toe tip, as soon as the hip moving on needs it to keep
+// the stance knee at the normative angle; a swing whose ankle and foot follow a normative swing's joint angles (kSwingHipDeg...) on the walker's own legs,
 // clearing the ground; arms swung about the hanging pose. Joint-angle curves against a normative walk:
 // systems/gait_metrics.h GaitCycleRecorder.
 //
@@ -48,6 +48,11 @@ namespace strata {
 struct GaitStyle {
   float pelvis_yaw = 0.07f;          // pelvic rotation amplitude about the vertical (~4 deg)
   float pelvis_tilt = 0.07f;         // pelvic list amplitude (~4 deg), swing side down
+  // The list's lag behind a sine peaking in mid single support (fraction of a cycle). The OpenSim subject's list
+  // is largest around heel strike, the leading side 3-4.5 deg down (pelvis_list), so at double support the
+  // trailing hip stands higher than the leading one and its knee stays straighter; 0.1 came out of the joint
+  // search (below, bob_curvature), 0.25 (the subject's own timing) cost 2 deg of ankle RMS.
+  float pelvis_list_lag = 0.15f;
   float lateral_sway = 0.022f;       // pelvis shift towards the stance leg
   // Pelvic tilt (forward positive). Hip flexion is measured against the pelvis, and the OpenSim subject's pelvis
   // tilts 3.6-6.2 deg backwards (pelvis_tilt, +Z like hip flexion; mean 4.7): with it the walker's thighs swing
@@ -57,59 +62,78 @@ struct GaitStyle {
   float pelvis_anterior_tilt = -0.082f;
   // The pelvis' highest height above rest (m), where the legs reach: the default rest leg leans 5 deg with the ankle
   // behind the hip, so a straight leg under the hip reaches a few millimetres higher than rest.
-  float pelvis_rise_max = 0.01f;
+  float pelvis_rise_max = 0.0f;  // 0.01 before the joint search
   // The pelvis holds the stance knee at the subject's stance angles (kStanceKneeDeg, its loading response
   // included) through this fraction of the stance; later the heel rise keeps it there (heel_hold_from).
   float stance_knee_until = 0.75f;
   // The pelvis height follows parabolas of this curvature (m/s^2) through the lowest heights the last and the
   // next heel strike allow, so the bob is smooth; hard reach limits alone gave ~1 cm/frame kinks.
   // 1.0 kept the pelvis ~4 cm low through mid-stance (knee 25-30 deg); 4-15 followed the legs' limits closer
-  // (knee RMS 0.5-1 deg lower) but shook the pelvis 1.5x harder in steady walking. 2.7 (was 1.8) came out of the
-  // joint search of 2026-11-27 (heel_off, heel_rise_end_slope, heel_hold_height below; docs/motion.md): the
-  // pelvis follows the double-support dip closer, excursion 2.6 -> 3.3 cm at 1.2 m/s, 2.1 -> 2.6 cm at 0.8.
-  float bob_curvature = 2.7f;
+  // (knee RMS 0.5-1 deg lower) but shook the pelvis 1.5x harder in steady walking. 3.7 (was 1.8) from the joint
+  // search of 2026-11-27: a coordinate search of the numbers marked so here against the gait-cycle targets of
+  // the default walker and every walker class (docs/motion.md); with the longer lead the pelvis has to follow
+  // the double-support dip closer.
+  float bob_curvature = 3.7f;
   // Footprint placed this many step lengths ahead of the pelvis at heel strike. With the heel rise below it
   // balances the leading leg at heel strike against the trailing one at toe-off: measured pelvis bob peak to
   // peak 2.2 / 5.9 / 10.7 cm at 0.8 / 1.2 / 1.6 m/s (0.5 gave 10 cm and 0.65 gave 7.8 cm at 1.2 m/s).
   // Now 0.53 with the heel and toe rockers and the straight rest leg (issue 21; searched with the stance values
   // below, 0.5-0.56): 0.6 put the foot 0.35 m ahead of the hip at heel strike, a 7 cm dip and the hip flexed 40 deg.
-  float footprint_lead = 0.53f;
+  // 0.58 from the joint search, with the swing's catch-up and the list's lag: footprint() places the rest ankle
+  // `lead` ahead, and the default rest ankle is 7 cm behind the hip, so 0.53 left every foot 6-8 cm further back
+  // under the hip than the subject's through the whole cycle (heel strike 0.26 m ahead of the hip, the subject's
+  // 0.33).
+  float footprint_lead = 0.58f;
+  // The lead's fraction of the step falls by this much per step length beyond 0.7 m at rig scale, and rises by
+  // lead_short_step_rise per step length below it: fast walkers' long steps dipped the pelvis 7 cm and bent their
+  // terminal-stance knee 11-16 deg at 0.58; a slow walker's short step landed bent-kneed at the same lead.
+  float lead_long_step_drop = 0.1f;
+  float lead_short_step_rise = 0.35f;
   // Fraction of stance at which the heel starts to rise at the latest (~34 % of the cycle); it rises sooner when
   // the body's progress needs it (heel_hold_from). 0.55 (was 0.59): the earlier roll carries the trailing hip
   // less far back (hip minimum -26.2 -> -23.7 deg at 1.2 m/s, -27.3 -> -24.1 at 1.3) and straightens the fast
   // walkers' terminal stance (14.8 -> 8.7 deg at 1.8 m/s), for 0.4 deg more knee RMS. Later (0.7) followed the
   // subject's pre-swing knee exactly (knee RMS 5.8) but left the hip at -28.8: the foot then stays where the
   // rest ankle's 7 cm behind the hip puts every footprint (footprint() places the rest ankle `lead` ahead).
-  float heel_off = 0.55f;
+  // 0.6 with the longer lead (joint search).
+  float heel_off = 0.6f;
   // From this fraction of stance (~28 % of the cycle) the heel rises as soon and as fast as the hip moving on ahead
   // needs to keep the stance knee at the subject's angle (systems/locomotion.cpp stance_pose), for the pelvis
   // as placed; the look-ahead assumes the pelvis heel_hold_height above rest. A schedule alone (heel_off and the
   // pitch curve below) left the trailing knee bent 15-35 deg in terminal stance, where the subject's is 4-7.
-  float heel_hold_from = 0.45f;
-  float heel_hold_height = 0.015f;  // 0.005 before the joint search (bob_curvature)
+  float heel_hold_from = 0.5f;      // 0.45 before the joint search (bob_curvature)
+  float heel_hold_height = 0.015f;  // 0.005 before it
   // Heel strike: the foot lands toes up by heel_strike_pitch and rolls down about its heel until foot flat at
   // heel_rocker of the stance (~8 % of the cycle), so the ankle is near neutral at heel strike as in a gait lab;
   // a foot landing flat left the ankle ~15 deg plantarflexed under a shin still leaning back. 0.36 (21 deg) lands
-  // it 5 deg dorsiflexed at 1.2 m/s (0.44: 10; the subject 1).
-  float heel_strike_pitch = 0.36f;
-  float heel_rocker = 0.115f;
+  // it 5 deg dorsiflexed at 1.2 m/s (0.44: 10; the subject 1). 0.39 and 0.155 from the joint search (4.6 deg).
+  float heel_strike_pitch = 0.39f;
+  float heel_rocker = 0.155f;
 
   // Foot pitch at toe-off by the schedule (~57 deg, the subject's): about the ball until the toes bend no further
   // (LocomotionRig::toe_limit), then about the toe tip. The heel hold may roll it further.
-  float toe_off_pitch = 1.0f;
+  float toe_off_pitch = 0.92f;  // 1.0 before the joint search
   // How fast the heel still rises at toe-off, as a fraction of the rise's mean rate. 0 (smoothstep) eased the foot
   // to rest just as the swing snatched it up, so the trailing leg's reach made a sharp dip right at toe-off that
   // the pelvis could not anticipate when the cadence changed (1.7 cm/frame^2 jolts); 0.85 rounds it (and the
   // subject's foot turns fastest there too: ankle RMS 11.6 -> 10.5 deg). It applies in full from 110 steps/min
   // and fades out below 90: a slow walker's heel then rose too late, the pelvis sank in double support and the
   // knee landed 11 deg bent at 0.8 m/s (3 deg without). 0.7 with the heel hold; 0.85 from the joint search
-  // (bob_curvature), with which the 1.63 m walker at 0.8 m/s lands its knee 7.8 deg bent (was 10.3).
-  float heel_rise_end_slope = 0.85f;
+  // (bob_curvature); 0.9 with the longer lead.
+  float heel_rise_end_slope = 0.9f;
   // The swing follows the normative swing's joint angles (kSwingHipDeg... below); its knots in
   // the middle of the swing are raised where the toe tip or heel would pass lower than this above the ground
   // (swing_clearance_min_mm in the gait report: 13 mm with 0.025; 0.035 gave 21 mm but folded the knee 2 deg
-  // more than the subject's through the swing).
-  float swing_clearance = 0.025f;
+  // more than the subject's through the swing). 0.008 since the joint search: the raised knot at 75 % of the
+  // swing kept the foot 3.5 cm high in late swing, the knee 10-13 deg more bent than the subject's at 84-92 % of
+  // the cycle. The swing is now also sampled between the knots (make_swing), so the least clearance measured
+  // over the 25-walker report is close to this (people's least toe clearance in mid-swing: 1.3 cm mean, Winter).
+  float swing_clearance = 0.008f;
+  // The swing's catch-up (systems/locomotion.cpp make_swing): the foot makes up its misfit against the normative
+  // swing's path at toe-off over this first fraction of the swing, and the one at heel strike from
+  // swing_land_from on; 0 spreads both over the whole swing as before.
+  float swing_catch_up = 0.5f;
+  float swing_land_from = 0.55f;
   float arm_swing = 0.17f;           // wrist travel forward/back at a 0.7 m step, scaled with step length
   float cadence_rate = 25.0f;        // how fast cadence eases to its target, steps/min per second
   float speed_period = 18.0f;        // seconds per cycle of the speed schedule

@@ -182,14 +182,19 @@ void gait_section(Crowd& scene, UiProbe* probe) {
   ImGui::SliderFloat("pelvis yaw", &g.pelvis_yaw, 0.0f, 0.2f, "%.3f rad");
   note(probe, "pelvis yaw");
   ImGui::SliderFloat("pelvis list", &g.pelvis_tilt, 0.0f, 0.2f, "%.3f rad");
+  ImGui::SliderFloat("list lag", &g.pelvis_list_lag, 0.0f, 0.5f, "%.2f cycle");
   ImGui::SliderFloat("lateral sway", &g.lateral_sway, 0.0f, 0.06f, "%.3f m");
   ImGui::SliderFloat("anterior tilt", &g.pelvis_anterior_tilt, -0.2f, 0.3f, "%.3f rad");
   ImGui::SliderFloat("pelvis rise", &g.pelvis_rise_max, -0.03f, 0.03f, "%.3f m");
   ImGui::SliderFloat("footprint lead", &g.footprint_lead, 0.3f, 0.9f, "%.2f steps");
+  ImGui::SliderFloat("lead drop, long step", &g.lead_long_step_drop, 0.0f, 0.5f, "%.2f");
+  ImGui::SliderFloat("lead rise, short step", &g.lead_short_step_rise, 0.0f, 0.8f, "%.2f");
   ImGui::SliderFloat("heel off", &g.heel_off, 0.1f, 0.7f, "%.2f of stance");
   ImGui::SliderFloat("heel hold from", &g.heel_hold_from, 0.2f, 1.0f, "%.2f of stance");  // 1: the schedule alone
   ImGui::SliderFloat("toe-off pitch", &g.toe_off_pitch, 0.0f, 1.3f, "%.2f rad");
   ImGui::SliderFloat("swing clearance", &g.swing_clearance, 0.0f, 0.15f, "%.3f m");
+  ImGui::SliderFloat("swing catch-up", &g.swing_catch_up, 0.0f, 0.9f, "%.2f of swing");  // 0: spread evenly
+  ImGui::SliderFloat("swing lands from", &g.swing_land_from, 0.1f, 0.95f, "%.2f of swing");
   ImGui::SliderFloat("arm swing", &g.arm_swing, 0.0f, 0.4f, "%.3f m");
   note(probe, "arm swing");
   if (ImGui::Button("Default gait")) g = GaitStyle{};

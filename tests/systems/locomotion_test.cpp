@@ -52,6 +52,9 @@ TEST(Locomotion, CrowdMeetsTheGaitTargets) {
   EXPECT_EQ(r.nan_count, 0u);
   EXPECT_GT(r.strides, 9u * 2u * 5u) << "every foot made several strides in 10 s";
   EXPECT_LT(r.stride_length_error_pct, 2.0);
+  // Toe tip and heel clear the ground through the middle of every swing (GaitStyle::swing_clearance, guarded
+  // between the swing's knots too; before, a slow walker's toe went 3-7 mm into the ground at mid-swing).
+  EXPECT_GT(r.swing_clearance_min_mm, 3.0);
   EXPECT_GT(r.pelvis_bob_cm_mean, 1.0) << "the pelvis oscillates";
   EXPECT_LT(r.pelvis_bob_cm_mean, 12.0);
 }
