@@ -13,9 +13,9 @@
 // heel strike, and the subject's backward tilt); stance with three rockers: heel strike toes up rolling down
 // about the heel, a flat foot, then a heel rise onto the ball (the midtarsal joint keeping the toes on the
 // ground) and, once the toes bend no further, about the toe tip, as soon as the hip moving on needs it to keep
-// the stance knee at the normative angle; a swing whose ankle and foot follow a normative swing's joint angles (kSwingHipDeg...) on the walker's own legs,
-// clearing the ground; arms swung about the hanging pose. Joint-angle curves against a normative walk:
-// systems/gait_metrics.h GaitCycleRecorder.
+// the stance knee at the normative angle; a swing whose ankle and foot follow a normative swing's joint angles
+// (kSwingHipDeg...) on the walker's own legs, clearing the ground; arms swung about the hanging pose.
+// Joint-angle curves against a normative walk: systems/gait_metrics.h GaitCycleRecorder.
 //
 // Cadence may change at any time: phase and distance integrate it, footprints are placed once at toe-off, so a
 // change never moves a planted foot or pops the pelvis.
@@ -50,8 +50,9 @@ struct GaitStyle {
   float pelvis_tilt = 0.07f;         // pelvic list amplitude (~4 deg), swing side down
   // The list's lag behind a sine peaking in mid single support (fraction of a cycle). The OpenSim subject's list
   // is largest around heel strike, the leading side 3-4.5 deg down (pelvis_list), so at double support the
-  // trailing hip stands higher than the leading one and its knee stays straighter; 0.1 came out of the joint
-  // search (below, bob_curvature), 0.25 (the subject's own timing) cost 2 deg of ankle RMS.
+  // trailing hip stands higher than the leading one and its knee stays straighter. 0.15 came out of the joint
+  // search (below, bob_curvature); 0.25 (the subject's own timing) cost 2-3 deg of ankle RMS; 0 (as before) held
+  // the longer lead's trailing knee bent (knee RMS 7.9 against 6.0).
   float pelvis_list_lag = 0.15f;
   float lateral_sway = 0.022f;       // pelvis shift towards the stance leg
   // Pelvic tilt (forward positive). Hip flexion is measured against the pelvis, and the OpenSim subject's pelvis
@@ -89,13 +90,11 @@ struct GaitStyle {
   // terminal-stance knee 11-16 deg at 0.58; a slow walker's short step landed bent-kneed at the same lead.
   float lead_long_step_drop = 0.1f;
   float lead_short_step_rise = 0.35f;
-  // Fraction of stance at which the heel starts to rise at the latest (~34 % of the cycle); it rises sooner when
-  // the body's progress needs it (heel_hold_from). 0.55 (was 0.59): the earlier roll carries the trailing hip
-  // less far back (hip minimum -26.2 -> -23.7 deg at 1.2 m/s, -27.3 -> -24.1 at 1.3) and straightens the fast
-  // walkers' terminal stance (14.8 -> 8.7 deg at 1.8 m/s), for 0.4 deg more knee RMS. Later (0.7) followed the
-  // subject's pre-swing knee exactly (knee RMS 5.8) but left the hip at -28.8: the foot then stays where the
-  // rest ankle's 7 cm behind the hip puts every footprint (footprint() places the rest ankle `lead` ahead).
-  // 0.6 with the longer lead (joint search).
+  // Fraction of stance at which the heel starts to rise at the latest (~38 % of the cycle); it rises sooner when
+  // the body's progress needs it (heel_hold_from). 0.6 from the joint search (was 0.59). On the old 0.53 lead,
+  // 0.55 carried the trailing hip less far back (hip minimum -26.2 -> -23.7 deg) and 0.7 followed the subject's
+  // pre-swing knee exactly (knee RMS 5.8) but left the hip at -28.8: the foot stayed where the rest ankle's 7 cm
+  // behind the hip put every footprint.
   float heel_off = 0.6f;
   // From this fraction of stance (~28 % of the cycle) the heel rises as soon and as fast as the hip moving on ahead
   // needs to keep the stance knee at the subject's angle (systems/locomotion.cpp stance_pose), for the pelvis
@@ -106,7 +105,7 @@ struct GaitStyle {
   // Heel strike: the foot lands toes up by heel_strike_pitch and rolls down about its heel until foot flat at
   // heel_rocker of the stance (~8 % of the cycle), so the ankle is near neutral at heel strike as in a gait lab;
   // a foot landing flat left the ankle ~15 deg plantarflexed under a shin still leaning back. 0.36 (21 deg) lands
-  // it 5 deg dorsiflexed at 1.2 m/s (0.44: 10; the subject 1). 0.39 and 0.155 from the joint search (4.6 deg).
+  // it 5 deg dorsiflexed at 1.2 m/s (0.44: 10; the subject 1). 0.39 and 0.155 from the joint search: 4 deg.
   float heel_strike_pitch = 0.39f;
   float heel_rocker = 0.155f;
 
