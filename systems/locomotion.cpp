@@ -261,12 +261,16 @@ struct GaitRef {
   float& leg(int l, std::uint32_t c) const { return base[(kGaitLegs + l * kLegFloats + c) * stride + i]; }
 };
 
+// The step length (m at rig scale) the walk's step-dependent shapes are set for: the strike pitch, the lead's
+// fraction and the arm swing scale with a step against it.
+constexpr float kReferenceStep = 0.7f;
+
 // How far ahead of the pelvis at heel strike a footprint lands: the lead of a whole step, shortened in proportion
 // when an agent moves slower than its cadence's speed (a stopping walker's last step lands beside the other foot).
-// The fraction of the step varies with the step's length against 0.7 m at rig scale (GaitStyle::lead_long_step_drop,
+// The fraction of the step varies with the step's length against kReferenceStep (GaitStyle::lead_long_step_drop,
 // lead_short_step_rise).
 float footprint_lead(const GroundTrack& track, const GaitParameters& gp, const GaitStyle& style, float scale) {
-  const float ratio = gp.step_length / (0.7f * scale);
+  const float ratio = gp.step_length / (kReferenceStep * scale);
   const float fraction = style.footprint_lead - style.lead_long_step_drop * std::max(ratio - 1.0f, 0.0f) +
                          style.lead_short_step_rise * std::max(1.0f - ratio, 0.0f);
   return fraction * gp.step_length * track.speed_ratio;
@@ -558,7 +562,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     return {glm::mix(pelvis.position, window_end.position, u), pelvis.heading + u * heading_change};
   };
   const float sf = gp.stance_fraction();
-  const float step_ratio = std::clamp(gp.step_length * track.speed_ratio / (0.7f * scale), 0.5f, 1.0f);
+  const float step_ratio = std::clamp(gp.step_length * track.speed_ratio / (kReferenceStep * scale), 0.5f, 1.0f);
   const float strike_pitch = style.heel_strike_pitch * step_ratio * step_ratio;
   // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
   // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
@@ -973,7 +977,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, goal, frame.to_humanoid(ankle[leg].orientation),
                IkMode::PositionOrientation);
   }
-  const float swing_scale = std::clamp(gp.step_length * track.speed_ratio / (0.7f * scale), 0.3f, 1.6f);
+  const float swing_scale = std::clamp(gp.step_length * track.speed_ratio / (kReferenceStep * scale), 0.3f, 1.6f);
   for (int arm = 0; arm < 2; ++arm) {
     // Left arm back at left heel strike (phase 0), forward half a cycle later; the right arm the opposite.
     const float u = 4.0f * frac(phase + 0.5f * static_cast<float>(arm));
