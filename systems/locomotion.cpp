@@ -265,6 +265,14 @@ struct GaitRef {
 // fraction and the arm swing scale with a step against it.
 constexpr float kReferenceStep = 0.7f;
 
+// How far a step (this frame's, an agent's shortened by its speed ratio) runs beyond 1.05 kReferenceStep, in
+// reference steps: 0 for the default walker (1.02 at 1.2 m/s) and anyone slower, 0.17-0.24 at 1.8 m/s. The
+// fast walk's own shapes (GaitStyle::*_long_step_*) grow with it, so the walk the joint search fitted at 1.2 m/s
+// stays as it was.
+float long_step_excess(const GaitParameters& gp, const GroundTrack& track, float scale) {
+  return std::max(gp.step_length * track.speed_ratio / (kReferenceStep * scale) - 1.05f, 0.0f);
+}
+
 // How far ahead of the pelvis at heel strike a footprint lands: the lead of a whole step, shortened in proportion
 // when an agent moves slower than its cadence's speed (a stopping walker's last step lands beside the other foot).
 // The fraction of the step varies with the step's length against kReferenceStep (GaitStyle::lead_long_step_drop,
@@ -538,6 +546,12 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   if (source.agents() && clock.track.speed_ratio < 1.0f)
     walk_style.toe_off_pitch *= std::max(clock.track.speed_ratio, 0.3f);
   walk_style.heel_rise_end_slope *= smoothstep01((clock.gp.cadence - 90.0f) / 20.0f);
+  // A long fast step turns the pelvis and lists it further and rolls the trailing foot further onto its toes, as
+  // people's do (docs/motion.md, the fast walk); the same step's swing lifts the foot less (lift_long_step_drop).
+  const float longer = long_step_excess(clock.gp, clock.track, clock.scale);
+  walk_style.pelvis_yaw += base_style.yaw_long_step_rise * longer;
+  walk_style.pelvis_tilt += base_style.tilt_long_step_rise * longer;
+  walk_style.toe_off_pitch += base_style.toe_off_long_step_rise * longer;
   const GaitStyle& style = walk_style;
   const GaitParameters& gp = clock.gp;
   const GroundTrack& track = clock.track;
@@ -629,6 +643,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       const float real_travel = track.speed * std::max(1.0f - start, 0.0f) * gp.cycle_time;
       e0 = std::clamp(e1 - (hip_travel - real_travel), -limit, limit);
     }
+    const float lift_scale = std::max(1.0f - style.lift_long_step_drop * longer, 0.5f);
     Swing s;
     for (std::size_t k = 0; k < kSwingKnots; ++k) {
       const float sigma = static_cast<float>(k) / static_cast<float>(kSwingKnots - 1);
@@ -639,7 +654,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
         const float b = smoothstep01((sigma - style.swing_land_from) / std::max(1.0f - style.swing_land_from, 1e-3f));
         f += (e0 * (a - 1.0f + sigma) + e1 * (b - sigma)) / along_last;
       }
-      const float lift = up[k] - glm::mix(up[0], up[kSwingKnots - 1], f);
+      const float lift = lift_scale * (up[k] - glm::mix(up[0], up[kSwingKnots - 1], f));
       const float p = shin_pitch[k] + pitch_from * (1.0f - smoothstep01(sigma / 0.2f)) +
                       pitch_to * smoothstep01((sigma - 0.6f) / 0.4f);
       glm::vec3 ankle = from + chord * f + kUp * lift;

@@ -74,7 +74,7 @@ struct GaitStyle {
   // search of 2026-11-27: a coordinate search of the numbers marked so here against the gait-cycle targets of
   // the default walker and every walker class (docs/motion.md); with the longer lead the pelvis has to follow
   // the double-support dip closer.
-  float bob_curvature = 3.7f;
+  float bob_curvature = 4.0f;  // 4.0 from the fast walk's search (below, yaw_long_step_rise)
   // Footprint placed this many step lengths ahead of the pelvis at heel strike. With the heel rise below it
   // balances the leading leg at heel strike against the trailing one at toe-off: measured pelvis bob peak to
   // peak 2.2 / 5.9 / 10.7 cm at 0.8 / 1.2 / 1.6 m/s (0.5 gave 10 cm and 0.65 gave 7.8 cm at 1.2 m/s).
@@ -88,8 +88,24 @@ struct GaitStyle {
   // The lead's fraction of the step falls by this much per step length beyond 0.7 m at rig scale, and rises by
   // lead_short_step_rise per step length below it: fast walkers' long steps dipped the pelvis 7 cm and bent their
   // terminal-stance knee 11-16 deg at 0.58; a slow walker's short step landed bent-kneed at the same lead.
-  float lead_long_step_drop = 0.1f;
-  float lead_short_step_rise = 0.35f;
+  // 0.14 and 0.3 from the fast walk's search (0.1 and 0.35 before).
+  float lead_long_step_drop = 0.14f;
+  float lead_short_step_rise = 0.3f;
+  // The fast walk: per reference step (0.7 m at rig scale) by which a step runs beyond 1.05 of it (0 for the
+  // default walker at 1.2 m/s, 0.17-0.24 at 1.8 m/s), the pelvis turns (yaw) and lists (tilt) further, the foot
+  // leaves the ground further rolled onto its toes (toe_off_pitch), and the swing's knots rise that fraction less
+  // above the line from toe-off to heel strike. People's pelvic rotation and push-off grow with speed; here, at
+  // 1.8 m/s, without them the 0.84-0.88 m steps the gait formula gives carried the trailing hip to -26..-27 deg
+  // (target >= -25) and bobbed the pelvis 5.5-5.7 cm (target <= 5). The turn reaches +-12 deg on the shortest
+  // walker at 1.8 m/s (4 deg at 1.2 m/s). The push-off alone (toe-off rise 0.8, the others 0) held the hip to -22
+  // but left the bob; the list alone flattened the bob (0.13 rad: 5.0 cm) but lowered the swing hip so the knee
+  // folded past 70 deg; the lift drop gives that back. Values from a coordinate search of these four with the
+  // joint search's numbers (2026-11-27, second round), scored by every walker class's features and
+  // the default walker's RMS.
+  float yaw_long_step_rise = 0.6f;
+  float tilt_long_step_rise = 0.1f;
+  float toe_off_long_step_rise = 1.1f;
+  float lift_long_step_drop = 0.8f;
   // Fraction of stance at which the heel starts to rise at the latest (~38 % of the cycle); it rises sooner when
   // the body's progress needs it (heel_hold_from). 0.6 from the joint search (was 0.59). On the old 0.53 lead,
   // 0.55 carried the trailing hip less far back (hip minimum -26.2 -> -23.7 deg) and 0.7 followed the subject's
@@ -106,8 +122,9 @@ struct GaitStyle {
   // heel_rocker of the stance (~8 % of the cycle), so the ankle is near neutral at heel strike as in a gait lab;
   // a foot landing flat left the ankle ~15 deg plantarflexed under a shin still leaning back. 0.36 (21 deg) lands
   // it 5 deg dorsiflexed at 1.2 m/s (0.44: 10; the subject 1). 0.39 and 0.155 from the joint search: 4 deg.
-  float heel_strike_pitch = 0.39f;
-  float heel_rocker = 0.155f;
+  // 0.36 and 0.175 from the fast walk's search: the default walker's ankle RMS 5.7 -> 5.5 deg.
+  float heel_strike_pitch = 0.36f;
+  float heel_rocker = 0.175f;
 
   // Foot pitch at toe-off by the schedule (~57 deg, the subject's): about the ball until the toes bend no further
   // (LocomotionRig::toe_limit), then about the toe tip. The heel hold may roll it further.
@@ -131,7 +148,7 @@ struct GaitStyle {
   // The swing's catch-up (systems/locomotion.cpp make_swing): the foot makes up its misfit against the normative
   // swing's path at toe-off over this first fraction of the swing, and the one at heel strike from
   // swing_land_from on; 0 spreads both over the whole swing as before.
-  float swing_catch_up = 0.5f;
+  float swing_catch_up = 0.55f;  // 0.5 before the fast walk's search
   float swing_land_from = 0.55f;
   float arm_swing = 0.17f;           // wrist travel forward/back at a 0.7 m step, scaled with step length
   float cadence_rate = 25.0f;        // how fast cadence eases to its target, steps/min per second

@@ -57,11 +57,11 @@ TEST_P(GaitCycleFeaturesTest, CurvesHaveTheFeaturesOfANormalWalk) {
   // The swing knee folds (target 55-70 deg; the old walk peaked at 51).
   EXPECT_GE(f.swing_knee_peak_deg, 55.0);
   EXPECT_LE(f.swing_knee_peak_deg, 70.0);
-  // Hip: flexed at heel strike, extended before toe-off, not past -27.5 deg (issue target -25: met up to 1.3 m/s
-  // within 0.4 deg, -26.3 and -27.2 at 1.8 m/s).
+  // Hip: flexed at heel strike, extended before toe-off, not past -25 deg (the issue's target): -22.0..-23.3 over
+  // the six walkers (at 1.8 m/s -26.2 and -27.1 before the fast walk's push-off, GaitStyle::toe_off_long_step_rise).
   EXPECT_GT(c.hip_flexion[0], 10.0f);
   EXPECT_LT(f.hip_min_deg, 0.0);
-  EXPECT_GE(f.hip_min_deg, -27.5);
+  EXPECT_GE(f.hip_min_deg, -25.0);
   // Ankle near neutral at heel strike (the heel rocker; the strike pitch is fixed, so short slow steps land
   // 6.8 deg dorsiflexed), plantarflexed at push-off.
   EXPECT_NEAR(c.ankle_dorsiflexion[0], 0.0, 8.0);
@@ -74,10 +74,10 @@ TEST_P(GaitCycleFeaturesTest, CurvesHaveTheFeaturesOfANormalWalk) {
   EXPECT_GT(c.shoulder_flexion[50], 0.0f);
   // Trunk near vertical.
   EXPECT_LE(std::max(std::abs(f.trunk_min_deg), std::abs(f.trunk_max_deg)), 6.0);
-  // The pelvis rises and falls a few centimetres (literature 3-5, target 2.5-5): 2.8-3.8 up to 1.3 m/s, 5.5 and
-  // 5.7 at 1.8 m/s.
+  // The pelvis rises and falls a few centimetres (literature 3-5, target 2.5-5): 2.9-3.8 up to 1.3 m/s, 4.6 and
+  // 4.9 at 1.8 m/s (5.5 and 5.7 before the fast walk's list and turn).
   EXPECT_GE(c.pelvis_vertical_excursion_cm, 2.5);
-  EXPECT_LE(c.pelvis_vertical_excursion_cm, 6.0);
+  EXPECT_LE(c.pelvis_vertical_excursion_cm, 5.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(SpeedsAndStatures, GaitCycleFeaturesTest,
@@ -95,12 +95,40 @@ TEST(GaitCycle, CloserToTheNormativeSubjectThanTheCrouchedWalk) {
   // response 5.9, 3.6, 10.9. That walk on the straightened leg, read in a gait lab's angles: 14.7, 4.4, 11.9. Now, the
   // stance knee held at the subject's angles by the pelvis and then by the heel rise: 7.3, 5.4, 7.3; after the joint
   // search of GaitStyle (heel-off, bob curvature): 7.7, 5.3, 7.1; with the longer lead, the list's lag and the
-  // swing's catch-up: 6.0, 3.5, 5.7.
+  // swing's catch-up: 6.0, 3.5, 5.7; with the fast walk's search: 5.9, 3.6, 5.5.
   const GaitCycle c = measure_gait_cycle(default_rig(), GaitStyle{}, {});
   const NormativeRms rms = normative_rms(c, shipped_normative_gait());
   EXPECT_LT(rms.knee, 6.5);
   EXPECT_LT(rms.hip, 4.5);
-  EXPECT_LT(rms.ankle, 6.5);
+  EXPECT_LT(rms.ankle, 6.0);
+}
+
+// The fast walk's shapes (GaitStyle::*_long_step_*) grow with the step beyond the reference: the default walker at
+// 1.2 m/s walks exactly as without them, and the short walker at 1.8 m/s needs them for the issue's hip and
+// pelvis targets (without them, on the other numbers of the same search: hip -29.8 deg, excursion 5.4 cm).
+TEST(GaitCycle, TheFastWalkShapesChangeOnlyLongSteps) {
+  GaitStyle plain;
+  plain.yaw_long_step_rise = plain.tilt_long_step_rise = plain.toe_off_long_step_rise = 0.0f;
+  plain.lift_long_step_drop = 0.0f;
+  const GaitCycle with_default = measure_gait_cycle(default_rig(), GaitStyle{}, {});
+  const GaitCycle plain_default = measure_gait_cycle(default_rig(), plain, {});
+  for (int i = 0; i < kGaitCycleSamples; ++i) {
+    ASSERT_EQ(with_default.knee_flexion[i], plain_default.knee_flexion[i]) << i;
+    ASSERT_EQ(with_default.hip_flexion[i], plain_default.hip_flexion[i]) << i;
+  }
+  GaitCycleOptions fast;
+  fast.speed = 1.8f;
+  fast.height = 1.63f;
+  fast.cycles = 2;
+  const GaitCycle with = measure_gait_cycle(default_rig(), GaitStyle{}, fast);
+  const GaitCycle without = measure_gait_cycle(default_rig(), plain, fast);
+  const GaitCycleFeatures fw = gait_cycle_features(with), fo = gait_cycle_features(without);
+  std::printf("1.63 m at 1.8 m/s: hip min %.1f with, %.1f without; excursion %.2f with, %.2f without\n", fw.hip_min_deg,
+              fo.hip_min_deg, with.pelvis_vertical_excursion_cm, without.pelvis_vertical_excursion_cm);
+  EXPECT_LT(fo.hip_min_deg, -25.0);
+  EXPECT_GE(fw.hip_min_deg, -25.0);
+  EXPECT_GT(without.pelvis_vertical_excursion_cm, 5.0);
+  EXPECT_LE(with.pelvis_vertical_excursion_cm, 5.0);
 }
 
 // The swing follows the normative swing about the real hip between its catch-up and its landing
