@@ -195,6 +195,11 @@ void gait_section(Crowd& scene, UiProbe* probe) {
   ImGui::SliderFloat("swing clearance", &g.swing_clearance, 0.0f, 0.15f, "%.3f m");
   ImGui::SliderFloat("swing catch-up", &g.swing_catch_up, 0.0f, 0.9f, "%.2f of swing");  // 0: spread evenly
   ImGui::SliderFloat("swing lands from", &g.swing_land_from, 0.1f, 0.95f, "%.2f of swing");
+  // The fast walk: per reference step a step runs beyond 1.05 of it (0 at 1.2 m/s, up to 0.24 at 1.8 m/s).
+  ImGui::SliderFloat("fast: more pelvis yaw", &g.yaw_long_step_rise, 0.0f, 1.2f, "%.2f");
+  ImGui::SliderFloat("fast: more pelvis list", &g.tilt_long_step_rise, 0.0f, 0.5f, "%.2f");
+  ImGui::SliderFloat("fast: more toe-off pitch", &g.toe_off_long_step_rise, 0.0f, 2.5f, "%.2f");
+  ImGui::SliderFloat("fast: lower swing", &g.lift_long_step_drop, 0.0f, 1.6f, "%.2f");
   ImGui::SliderFloat("arm swing", &g.arm_swing, 0.0f, 0.4f, "%.3f m");
   note(probe, "arm swing");
   if (ImGui::Button("Default gait")) g = GaitStyle{};
