@@ -177,6 +177,9 @@ AnklePose rolled_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
 
 // Where the stance leg's hip is or will be (world) and how far from it the ankle may be (world units): the heel
 // rises no later than this distance needs.
+// How far short of the ankle's plantarflexion limit the heel hold stops rolling the foot (rad).
+constexpr float kAnkleLimitMargin = 0.02f;
+
 struct HipHold {
   glm::vec3 hip;
   float reach;
@@ -238,6 +241,20 @@ AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
     }
     p = std::min(q, 1.3f);
     pose = rolled_pose(rig, leg, plant, h, p, scale);
+    // No further than the ankle plantarflexes: past its limit IK keeps the shin and turns the foot about the ankle,
+    // which lifted an agent's toe 4-6 cm a frame before the early lift when its body had moved on (the crossing,
+    // the plaza). The shin leans forward of the ankle-hip line by the knee's bend at this distance. A free walk
+    // never comes near it (0 orientation clamps over the gait report).
+    const glm::vec3 to_hip = to_foot * (hold->hip - pose.position);
+    const float d = std::min(glm::length(to_hip), rig.leg_reach[leg] * scale);
+    const float a = rig.thigh_length[leg] * scale, b = rig.shin_length[leg] * scale;
+    const float bend = std::acos(std::clamp((b * b + d * d - a * a) / (2.0f * b * std::max(d, 1e-6f)), -1.0f, 1.0f));
+    const float most = std::atan2(to_hip.z, to_hip.y) + bend - rig.rest_ankle_dorsiflexion +
+                       rig.ankle_plantarflexion_limit - kAnkleLimitMargin;
+    if (p > most) {
+      p = std::max(most, heel_rise_pitch(tau, style));
+      pose = rolled_pose(rig, leg, plant, h, p, scale);
+    }
   }
   if (foot_pitch) *foot_pitch = p;
   return pose;
@@ -264,6 +281,11 @@ struct GaitRef {
 // The step length (m at rig scale) the walk's step-dependent shapes are set for: the strike pitch, the lead's
 // fraction and the arm swing scale with a step against it.
 constexpr float kReferenceStep = 0.7f;
+
+// The furthest an agent's body may be off its agent (m at rig scale; GaitStyle::lag_dip), about an agent's radius.
+// Unbounded, lags ran to 2.7 m in the crossing (a body held back stance after stance, or pulled on by a foot landed
+// beyond reach ahead); beyond this the foot drags instead of the body leaving its disc.
+constexpr float kMaxLag = 0.3f;
 
 // How far a step (this frame's, an agent's shortened by its speed ratio) runs beyond 1.05 kReferenceStep, in
 // reference steps: 0 for the default walker (1.02 at 1.2 m/s) and anyone slower, 0.17-0.24 at 1.8 m/s. The
@@ -463,12 +485,28 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
     // limited in acceleration and turning, so the cadence follows it directly rather than easing; a walker
     // standing (kGaitIdle > 0) holds its phase.
     const ColumnView<const float>& a = source.agent;
-    track.position = {a.at(kAgentPx, i), a.at(kAgentPz, i)};
+    // The body follows the agent, off it by the lag a planted foot imposed (walk_one). The lag eases out
+    // (lag_release), no faster than lag_catch_up, and the body's velocity carries that catch-up so its footprints
+    // are planned for where it really goes. Measured, largest foot slide crossing / plaza / bottleneck: 88 / 169
+    // / 81 mm. Rejected: eased out exponentially alone (a 0.3 m lag asks for an extra metre a second): 128 / 192 /
+    // 119; with the rate limit but the catch-up left out of the velocity: 82 / 139 / 88, one crossing agent
+    // never arriving.
+    glm::vec2 lag(g[kGaitLagX], g[kGaitLagZ]), catch_up(0.0f);
+    const float lag_length = glm::length(lag);
+    if (lag_length > 0.0f && dt > 0.0f) {
+      const float reduce =
+          std::min(lag_length * (1.0f - std::exp(-dt / style.lag_release)), style.lag_catch_up * scale * dt);
+      catch_up = -lag * (reduce / (lag_length * dt));
+      lag *= 1.0f - reduce / lag_length;
+      g[kGaitLagX] = lag.x;
+      g[kGaitLagZ] = lag.y;
+    }
+    track.position = glm::vec2(a.at(kAgentPx, i), a.at(kAgentPz, i)) + lag;
     track.heading = a.at(kAgentHeading, i);
-    track.speed = std::hypot(a.at(kAgentVx, i), a.at(kAgentVz, i));
-    track.turn_rate = turn_rate_at(track.speed, style.turn_rate, style.turn_in_place_rate);
     // The body moves with its velocity and turns to face where it wants to go (agent_move.h).
-    track.velocity = {a.at(kAgentVx, i), a.at(kAgentVz, i)};
+    track.velocity = glm::vec2(a.at(kAgentVx, i), a.at(kAgentVz, i)) + catch_up;
+    track.speed = glm::length(track.velocity);
+    track.turn_rate = turn_rate_at(track.speed, style.turn_rate, style.turn_in_place_rate);
     glm::vec2 face = {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)};
     if (glm::length(face) < 0.05f) face = track.velocity;
     if (glm::length(face) > 0.05f) track.turn = wrap_angle(std::atan2(face.x, face.y) - track.heading);
@@ -534,7 +572,9 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     const float sf_before = current_gait(g).stance_fraction();
     for (int leg = 0; leg < 2; ++leg)
       if (g.leg(leg, kLegSwinging) < 0.5f && unreachable(lanes, leg, i) &&
-          !lifts_early(frac(g[kGaitPhase] - 0.5f * static_cast<float>(leg)), sf_before, base_style))
+          !lifts_early(frac(g[kGaitPhase] - 0.5f * static_cast<float>(leg)), sf_before, base_style) &&
+          !(g.leg(1 - leg, kLegSwinging) < 0.5f &&
+            lifts_early(frac(g[kGaitPhase] - 0.5f * static_cast<float>(1 - leg)), sf_before, base_style)))
         hurry = base_style.stance_hurry;
   }
   const GaitClock clock =
@@ -554,11 +594,11 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   walk_style.toe_off_pitch += base_style.toe_off_long_step_rise * longer;
   const GaitStyle& style = walk_style;
   const GaitParameters& gp = clock.gp;
-  const GroundTrack& track = clock.track;
+  GroundTrack track = clock.track;  // agents: moved with the pelvis below
   const float phase = g[kGaitPhase];
   const float scale = clock.scale;
-  const Pose2 pelvis = clock.pelvis;
-  const WalkerFrame frame{pelvis.position, pelvis.heading, scale};
+  Pose2 pelvis = clock.pelvis;  // agents: moved back below if a planted foot holds the body (lag_dip)
+  WalkerFrame frame{pelvis.position, pelvis.heading, scale};
   const float lead = footprint_lead(track, gp, style, scale);
 
   // The pelvis' placement `ahead` seconds from now. Within the look-ahead window it is interpolated between now
@@ -566,7 +606,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   // path evaluation instead of one per sample cut the system from 7 to ~4 us per walker.
   const float window = 0.28f;  // of a cycle: short enough that a leg changes mode at most once
   const float window_time = window * gp.cycle_time;
-  const Pose2 window_end = track.at(window_time);
+  Pose2 window_end = track.at(window_time);
   float heading_change = window_end.heading - pelvis.heading;
   heading_change -= kTwoPi * std::round(heading_change / kTwoPi);
   auto pelvis_ahead = [&](float ahead) -> Pose2 {
@@ -744,7 +784,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       // Heel strike (the leg's phase wrapped): the swing target becomes the planted footprint.
       plant_foot(g, leg, {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)}, g.leg(leg, kLegToHeading),
                  g.leg(leg, kLegToDistance));
-    } else if (!swinging && source.agents() && lanes.ik_flags.components != 0 && unreachable(lanes, leg, i) &&
+    } else if (!swinging && source.agents() && lanes.ik_flags.components != 0 &&
+               (unreachable(lanes, leg, i) || (g.leg(1 - leg, kLegSwinging) < 0.5f && unreachable(lanes, 1 - leg, i))) &&
                lifts_early(psi, sf, style)) {
       // Agents: a rolling stance foot the leg could not reach last frame lifts now (GaitStyle::early_lift), from
       // the pose it has, and lands at the usual heel strike.
@@ -907,6 +948,53 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
                                                                                 style.idle_sway_period));
   glm::vec3 root_translation{motion.sway, style.pelvis_rise_max, 0.0f};
   const glm::vec3 ankle_world[2] = {ankle[0].position, ankle[1].position};
+  if (source.agents()) {
+    // Agents: a planted foot holds the body back. Avoidance may carry an agent further from a planted foot than
+    // its leg reaches before that stance ends; the reach limits below would then drop the pelvis towards the
+    // ground (a trace in the crossing: the root 0.7 m below standing, the hip level with the ankle it strained
+    // for) and IK would drag the foot (foot slide up to 17 cm). Instead the body stays where each stance leg
+    // still reaches its foot with the pelvis at most lag_dip below standing, off the agent by the difference
+    // (kGaitLagX/Z, at most kMaxLag), which eases out (advance_gait_clock) once the foot lifts. The agent's own
+    // position, the one avoidance keeps clear of others, is untouched: the body trails its disc by centimetres
+    // for a moment. A foot that landed beyond reach ahead holds the body too (it is the body that fell behind).
+    // Rejected: only feet behind the hip holding it (the crossing's largest slide 88 -> 117 mm: pushed back in
+    // a jam, bodies recede from feet planted ahead), and footprints led along the velocity instead of the heading
+    // so a receding body steps backwards (largest slides 88 -> 107 mm crossing, 169 -> 191 mm plaza).
+    glm::vec3 back(0.0f);  // humanoid units
+    for (int leg = 0; leg < 2; ++leg) {
+      if (legs[leg].swinging || !binds[leg]) continue;
+      const glm::vec3 hip = hip_position(rig, motion, leg) + back;
+      const float reach = kReachUsed * rig.leg_reach[leg];
+      const glm::vec3 a = frame.to_humanoid(ankle_world[leg]);
+      const float below = hip.y - style.lag_dip / scale - a.y;  // hip above the ankle at the lowest pelvis
+      if (below <= 0.0f || below >= reach) continue;
+      const float allowed = std::sqrt(reach * reach - below * below);
+      const glm::vec2 apart(hip.x - a.x, hip.z - a.z);
+      const float d = glm::length(apart);
+      if (d > allowed) back -= glm::vec3(apart.x, 0.0f, apart.y) * ((d - allowed) / d);
+    }
+    if (back.x != 0.0f || back.z != 0.0f) {
+      glm::vec3 shift = yaw(pelvis.heading) * back * scale;  // world
+      // At most kMaxLag (scaled) off: a foot that held the body longer drags rather than the body leaving its disc
+      // (the early lift and the hurry end such stances first).
+      glm::vec2 lag = glm::vec2(g[kGaitLagX] + shift.x, g[kGaitLagZ] + shift.z);
+      const float most = kMaxLag * scale;
+      if (glm::length(lag) > most) {
+        const glm::vec2 bounded = lag * (most / glm::length(lag));
+        shift.x -= lag.x - bounded.x;
+        shift.z -= lag.y - bounded.y;
+        lag = bounded;
+      }
+      g[kGaitLagX] = lag.x;
+      g[kGaitLagZ] = lag.y;
+      pelvis.position += shift;
+      window_end.position += shift;
+      track.position += glm::vec2(shift.x, shift.z);
+      frame.position = pelvis.position;
+      lanes.placement.at(0, i) += shift.x;
+      lanes.placement.at(2, i) += shift.z;
+    }
+  }
   if (settle > 0.0f) binds[0] = binds[1] = true;
   const float now_limit = reach_limit(rig, frame, motion, ankle_world, 1e9f, 0.0f, binds, reach_now);
   const float curvature = style.bob_curvature / scale;  // humanoid units
@@ -948,6 +1036,9 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   const float span = g[kGaitDipAge] + future_ahead;
   const float envelope = smooth_min(past, future, std::clamp(curvature * span * span, 0.002f, 0.025f));
   root_translation.y = std::min(smooth_min(root_translation.y, envelope, 0.03f), now_limit);
+  // Never lower than lag_dip below standing: a swing foot re-aimed beyond the leg's reach near its landing dropped
+  // an agent's pelvis to the ground (0.6-0.7 m, the trace above); such a foot trails (IK clamps it) instead.
+  root_translation.y = std::max(root_translation.y, -style.lag_dip / scale);
   // The loading response (the knee yielding ~20 deg after heel strike) comes from the stance angles the reach
   // limits hold (stance_knee_until). Rejected, measured: an extra bump subtracted after the limits (3 cm over
   // 35 % of a cycle made the yield before the stance angles; with them, 0.75 cm added 3 deg past the subject's
@@ -1080,6 +1171,8 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
       reach = std::max(reach, glm::length(thigh + glm::angleAxis(theta, limb.flexion_axis) * shin));
     }
     rig.leg_reach[leg] = reach;
+    rig.thigh_length[leg] = glm::length(thigh);
+    rig.shin_length[leg] = glm::length(shin);
     if (leg == 0) {
       // Sagittal angles (about +X) from the straight-down direction: a positive one swings a hanging segment back.
       auto back_from_down = [](const glm::vec3& v) { return std::atan2(-v.z, -v.y); };
@@ -1097,6 +1190,8 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
   }
   const JointLimits& toe = skeleton.limits[rig.ball[0]];
   rig.toe_limit = toe.present ? std::max(-toe.lower.x, 0.0f) : 0.6f;
+  const JointLimits& ankle = skeleton.limits[rig.limbs[kLeftLeg].lower];
+  rig.ankle_plantarflexion_limit = ankle.present ? ankle.upper.x : 1.0f;
   const std::int32_t tip = skeleton.find_site("skull_tip");
   if (tip >= 0) {
     rig.rig_height = skeleton.sites[tip].position.y;

@@ -177,6 +177,14 @@ struct GaitStyle {
   // mm, bottleneck 187 -> 153, plaza 296 -> 158, but circle 218 -> 307); 10 made the steps jump a third of a cycle a
   // frame at 30 fps.
   float stance_hurry = 6.0f;
+  // Agents: the most the pelvis drops below standing (m at rig scale) for a stance leg the body has moved away
+  // from; beyond it the body stays back, off its agent (systems/locomotion.cpp walk_one), and the lag eases out
+  // with time constant lag_release (s), no faster than lag_catch_up (m/s at rig scale), the body's velocity
+  // carrying the catch-up so its footprints are planned for where it goes. The walk's own dip is 3-5 cm, so
+  // none of this binds in a free walk; the pelvis never goes lower than lag_dip.
+  float lag_dip = 0.08f;
+  float lag_release = 0.3f;
+  float lag_catch_up = 0.2f;
   // Agents: such a leg already past this fraction of its stance (its heel up, rolling onto the toes) lifts into
   // its swing now rather than at toe-off: its toe tip was what dragged (0.3 m at worst in the crossing). The swing
   // leaves from the pose the foot has and lands on time; 0 or above 1 turns it off.
@@ -227,6 +235,8 @@ struct LocomotionRig {
   glm::vec3 tip_rest[2];             // the toe tip's ground contact (l/r_forefoot_tip at the ball's height)
   float toe_limit = 0.6f;            // how far the midtarsal may dorsiflex to keep the toes down (rad)
   float leg_reach[2] = {0, 0};       // |hip-knee| + |knee-ankle|
+  float thigh_length[2] = {0, 0}, shin_length[2] = {0, 0};  // |hip-knee|, |knee-ankle|
+  float ankle_plantarflexion_limit = 1.0f;  // the ankle's upper x limit (rad, toes down), from the skeleton
   // The rest pose's own joint angles in a gait lab's terms (radians, sagittal, left leg; flexion and dorsiflexion
   // positive): thigh against the pelvis' vertical, shin against the thigh, shin's forward lean over the flat rest
   // foot. A gait lab's zero is a standing body with vertical thigh and shin over a flat foot; a skeleton's rest

@@ -3,7 +3,9 @@
 // GaitMetrics.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include <tbb/global_control.h>
@@ -81,6 +83,7 @@ struct Outcome {
   CrowdMetricsReport crowd;
   GaitReport gait;
   std::uint64_t hash = 0;
+  double lowest_root_m = 0.0;  // the lowest pelvis below standing over every walker and frame (root translation)
 };
 
 Outcome run(Crowd& crowd, float seconds, float fps = 30.0f) {
@@ -89,12 +92,16 @@ Outcome run(Crowd& crowd, float seconds, float fps = 30.0f) {
   Profiler profiler(120, false);
   const float dt = 1.0f / fps;
   const auto frames = static_cast<int>(seconds * fps + 0.5f);
+  double lowest_root = 0.0;
   for (int f = 0; f < frames; ++f) {
     step(crowd, dt, profiler);
     metrics.observe(crowd, dt);
-    gait.observe(crowd.lanes(), crowd.motion.paths, dt);
+    const WalkerLanes l = crowd.lanes();
+    gait.observe(l, crowd.motion.paths, dt);
+    for (std::size_t w = 0; w < l.count; ++w)
+      lowest_root = std::min<double>(lowest_root, l.root_translation[l.stride + w] * placement_of(l, w).scale);
   }
-  return {metrics.report(), gait.report(), state_hash(crowd)};
+  return {metrics.report(), gait.report(), state_hash(crowd), lowest_root};
 }
 
 TEST(ScenarioCrowd, CircleSwapsWithoutOverlapsAndEveryoneArrives) {
@@ -122,6 +129,27 @@ TEST(ScenarioCrowd, CircleSwapsWithoutOverlapsAndEveryoneArrives) {
   }
 }
 
+// In a jam, avoidance shoves agents further from a planted foot than the leg reaches before the stance ends. The
+// body stays behind its agent instead (GaitStyle::lag_dip): the pelvis never drops more than lag_dip below
+// standing, and the feet slide less than when the reach limits pulled the pelvis down after the agent (measured,
+// 24 agents meeting in the middle of a 6 m circle: largest foot slide 60 against 128 mm, lowest pelvis 0.08 against
+// 0.69 m below standing).
+TEST(ScenarioCrowd, PlantedFeetHoldTheBodiesInAJam) {
+  Outcome o[2];
+  for (int k = 0; k < 2; ++k) {
+    std::unique_ptr<Crowd> crowd = scenario_crowd(small_circle(24, 6.0f));
+    if (k == 1) crowd->motion.style.lag_dip = 10.0f;  // beyond any leg: no lag, no floor under the pelvis
+    o[k] = run(*crowd, 30.0f);
+    std::printf("%s: foot slide %.1f mm, lowest pelvis %.3f m, overlaps %llu\n", k == 0 ? "held" : "free",
+                o[k].gait.foot_slide_mm_max, o[k].lowest_root_m, static_cast<unsigned long long>(o[k].crowd.overlaps));
+  }
+  EXPECT_GE(o[0].lowest_root_m, -GaitStyle{}.lag_dip - 1e-4);
+  EXPECT_LT(o[1].lowest_root_m, -GaitStyle{}.lag_dip - 0.05) << "the jam does shove bodies out of reach";
+  EXPECT_LT(o[0].gait.foot_slide_mm_max, 0.75 * o[1].gait.foot_slide_mm_max);
+  EXPECT_EQ(o[0].crowd.overlaps, 0u);
+  EXPECT_EQ(o[0].gait.nan_count, 0u);
+}
+
 TEST(ScenarioCrowd, RoomEmptiesThroughItsDoor) {
   std::unique_ptr<Crowd> crowd = scenario_crowd(small_bottleneck(20, 1.6f));
   const Outcome o = run(*crowd, 60.0f);
@@ -142,29 +170,30 @@ TEST(ScenarioCrowd, RoomEmptiesThroughItsDoor) {
 // everyone is in within 150 s; with it off (settle_depth 0: settle wherever headway stops) the first arrivals stand
 // along the near edge and some never get in.
 TEST(ScenarioCrowd, ArrivalsMoveInRatherThanWallingOffTheRegion) {
-  Scenario s = small_bottleneck(50, 1.6f);
-  // Seed 11: with seed 7, since the walk's heel rise follows the body (issue 21), the run without the rule also
-  // brought everyone in; with seed 9, since the early lift and the faster hurry (issue 16), the run with it left
-  // one out at 150 s. Seeds 8, 10, 11 and 13 show the rule's effect in the Release build, and 10 left one out in
-  // the sanitized build (clang, -O1: other rounding, and a crowd pressing through a door amplifies it). Who arrives
-  // where depends on the walk's timing (a stance the IK cannot hold ends sooner; a stopping agent waits for its
-  // feet), so the counter-example needs a seed that shows it in both builds.
-  s.seed = 11;
-  s.groups[0].goal.region_min = {7.0f, -4.0f};
-  s.groups[0].goal.region_max = {12.0f, 4.0f};
-  double reached[2] = {0.0, 0.0};
-  // Under the sanitizers only the run with the rule (tests/sanitizer_scale.h): the other only shows it matters.
-  for (int k = 0; k < (test::kSanitizedBuild ? 1 : 2); ++k) {
-    std::unique_ptr<Crowd> crowd = scenario_crowd(s);
-    if (k == 1) crowd->agents->steering.settle_depth = 0.0f;
-    const Outcome o = run(*crowd, 150.0f);
-    EXPECT_EQ(o.crowd.overlaps, 0u);
-    EXPECT_EQ(o.crowd.nan_count, 0u);
-    reached[k] = o.crowd.reached_goal_pct;
+  // Who arrives where depends on the walk's timing (a stance the IK cannot hold ends sooner; a stopping agent waits
+  // for its feet), and a crowd pressing through a door amplifies any change to it, so one seed's outcome did not
+  // survive changes to the walk: the rule's effect is asked of two seeds. With the rule every agent of both runs
+  // comes in; without it at least one run leaves some outside (measured when this was written: seeds 1, 2, 6, 7,
+  // 8 and 11 of 1-13 left some out without the rule, none with it). Under the sanitizers (clang -O1, other
+  // rounding) only the runs with the rule (tests/sanitizer_scale.h): the others only show it matters.
+  double fewest_without = 100.0;
+  for (const std::uint32_t seed : {7u, 8u}) {
+    Scenario s = small_bottleneck(50, 1.6f);
+    s.seed = seed;
+    s.groups[0].goal.region_min = {7.0f, -4.0f};
+    s.groups[0].goal.region_max = {12.0f, 4.0f};
+    for (int k = 0; k < (test::kSanitizedBuild ? 1 : 2); ++k) {
+      std::unique_ptr<Crowd> crowd = scenario_crowd(s);
+      if (k == 1) crowd->agents->steering.settle_depth = 0.0f;
+      const Outcome o = run(*crowd, 150.0f);
+      EXPECT_EQ(o.crowd.overlaps, 0u);
+      EXPECT_EQ(o.crowd.nan_count, 0u);
+      if (k == 0) EXPECT_DOUBLE_EQ(o.crowd.reached_goal_pct, 100.0) << "seed " << seed << ", with the rule";
+      if (k == 1) fewest_without = std::min(fewest_without, o.crowd.reached_goal_pct);
+    }
   }
-  EXPECT_DOUBLE_EQ(reached[0], 100.0);
   if (!test::kSanitizedBuild) {
-    EXPECT_LT(reached[1], 100.0) << "without the rule the same run leaves some outside";
+    EXPECT_LT(fewest_without, 100.0) << "without the rule the same runs leave some outside";
   }
 }
 
