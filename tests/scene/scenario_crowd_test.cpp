@@ -188,8 +188,11 @@ TEST(ScenarioCrowd, ArrivalsMoveInRatherThanWallingOffTheRegion) {
       const Outcome o = run(*crowd, 150.0f);
       EXPECT_EQ(o.crowd.overlaps, 0u);
       EXPECT_EQ(o.crowd.nan_count, 0u);
-      if (k == 0) EXPECT_DOUBLE_EQ(o.crowd.reached_goal_pct, 100.0) << "seed " << seed << ", with the rule";
-      if (k == 1) fewest_without = std::min(fewest_without, o.crowd.reached_goal_pct);
+      if (k == 0) {
+        EXPECT_DOUBLE_EQ(o.crowd.reached_goal_pct, 100.0) << "seed " << seed << ", with the rule";
+      } else {
+        fewest_without = std::min(fewest_without, o.crowd.reached_goal_pct);
+      }
     }
   }
   if (!test::kSanitizedBuild) {
