@@ -304,7 +304,19 @@ float footprint_lead(const GroundTrack& track, const GaitParameters& gp, const G
   const float ratio = gp.step_length / (kReferenceStep * scale);
   const float fraction = style.footprint_lead - style.lead_long_step_drop * std::max(ratio - 1.0f, 0.0f) +
                          style.lead_short_step_rise * std::max(1.0f - ratio, 0.0f);
-  return fraction * gp.step_length * track.speed_ratio;
+  float along = 1.0f;
+  if (!track.path && track.speed > 0.05f) {
+    // Agents carried backwards (avoidance pushing them back in a jam) step back: the lead shrinks with the
+    // velocity's backward share c (1 + back_step_lead c, c < 0), to nothing at 48 deg behind sideways and to half
+    // a lead behind the pelvis when moving straight back. Led forwards regardless, feet landed ahead of a
+    // receding body and were left out of reach (the plaza's largest slides: hip 0.34-0.50 m behind the planted
+    // ankle). Largest foot slide crossing / plaza / bottleneck 88 / 169 / 81 -> 76 / 103 / 71 mm; 1, 2, 2.5 and 4
+    // measured 103 / 103, 83 / 133, 121 / 191 and 164 / 191 (crossing / plaza), and the lead along the velocity
+    // for sideways motion too (it shrinks a sidestep's lead) 107 / 191.
+    const float c = glm::dot(track.velocity / track.speed, glm::vec2(std::sin(track.heading), std::cos(track.heading)));
+    if (c < 0.0f) along = std::clamp(1.0f + style.back_step_lead * c, -1.0f, 1.0f);
+  }
+  return along * fraction * gp.step_length * track.speed_ratio;
 }
 
 // A leg's planted footprint and the swing it starts at toe-off, written where walk_one and start_walking need them.

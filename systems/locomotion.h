@@ -185,6 +185,9 @@ struct GaitStyle {
   float lag_dip = 0.08f;
   float lag_release = 0.3f;
   float lag_catch_up = 0.2f;
+  // Agents moving backwards step back: the footprint lead scales by 1 + back_step_lead c for the velocity's
+  // share c < 0 along the heading (systems/locomotion.cpp footprint_lead).
+  float back_step_lead = 1.5f;
   // Agents: such a leg already past this fraction of its stance (its heel up, rolling onto the toes) lifts into
   // its swing now rather than at toe-off: its toe tip was what dragged (0.3 m at worst in the crossing). The swing
   // leaves from the pose the foot has and lands on time; 0 or above 1 turns it off.
