@@ -307,7 +307,7 @@ float footprint_lead(const GroundTrack& track, const GaitParameters& gp, const G
   float along = 1.0f;
   if (!track.path && track.speed > 0.05f) {
     // Agents carried backwards (avoidance pushing them back in a jam) step back: the lead shrinks with the
-    // velocity's backward share c (1 + back_step_lead c, c < 0), to nothing at 48 deg behind sideways and to half
+    // velocity's backward share c (1 + back_step_lead c, c < 0), to nothing at 42 deg behind sideways and to half
     // a lead behind the pelvis when moving straight back. Led forwards regardless, feet landed ahead of a
     // receding body and were left out of reach (the plaza's largest slides: hip 0.34-0.50 m behind the planted
     // ankle). Largest foot slide crossing / plaza / bottleneck 88 / 169 / 81 -> 76 / 103 / 71 mm; 1, 2, 2.5 and 4
