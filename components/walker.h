@@ -43,8 +43,8 @@ enum GaitComponent : std::uint32_t {
   kGaitDipHeight,       // pelvis height limit (root translation y, humanoid units) at the last heel strike
   kGaitDipAge,          // seconds since that heel strike
   kGaitIdle,            // agents only: 0 walking .. 1 standing (feet together, flat, phase held); see locomotion.h
-  kGaitLagX,            // agents only: the body's offset (m, world x and z) behind the agent it follows, where
-  kGaitLagZ,            //   a planted foot held it back (locomotion.h GaitStyle::lag_dip); 0 otherwise
+  kGaitLagX,            // agents only: the body's offset (m, world x and z) from the agent it follows, where
+  kGaitLagZ,            //   a planted foot held it (locomotion.h GaitStyle::lag_dip), easing out; 0 otherwise
   kGaitLegs             // first per-leg component; leg l's component c is kGaitLegs + l * kLegFloats + c
 };
 enum LegComponent : std::uint32_t {

@@ -175,11 +175,11 @@ AnklePose rolled_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
   return {ball + q * ((rig.ankle_rest[leg] - rig.ball_rest[leg]) * scale), q};
 }
 
-// Where the stance leg's hip is or will be (world) and how far from it the ankle may be (world units): the heel
-// rises no later than this distance needs.
 // How far short of the ankle's plantarflexion limit the heel hold stops rolling the foot (rad).
 constexpr float kAnkleLimitMargin = 0.02f;
 
+// Where the stance leg's hip is or will be (world) and how far from it the ankle may be (world units): the heel
+// rises no later than this distance needs.
 struct HipHold {
   glm::vec3 hip;
   float reach;
@@ -288,12 +288,16 @@ constexpr float kReferenceStep = 0.7f;
 // beyond reach ahead); beyond this the foot drags instead of the body leaving its disc.
 constexpr float kMaxLag = 0.3f;
 
-// How far a step (this frame's, an agent's shortened by its speed ratio) runs beyond 1.05 kReferenceStep, in
-// reference steps: 0 for the default walker (1.02 at 1.2 m/s) and anyone slower, 0.17-0.24 at 1.8 m/s. The
-// fast walk's own shapes (GaitStyle::*_long_step_*) grow with it, so the walk the joint search fitted at 1.2 m/s
-// stays as it was.
+// This frame's step (an agent's shortened by its speed ratio) in reference steps.
+float reference_steps(const GaitParameters& gp, const GroundTrack& track, float scale) {
+  return gp.step_length * track.speed_ratio / (kReferenceStep * scale);
+}
+
+// How far a step runs beyond 1.05 kReferenceStep, in reference steps: 0 for the default walker (1.02 at 1.2 m/s)
+// and anyone slower, 0.17-0.24 at 1.8 m/s. The fast walk's own shapes (GaitStyle::*_long_step_*) grow with it, so
+// the walk the joint search fitted at 1.2 m/s stays as it was.
 float long_step_excess(const GaitParameters& gp, const GroundTrack& track, float scale) {
-  return std::max(gp.step_length * track.speed_ratio / (kReferenceStep * scale) - 1.05f, 0.0f);
+  return std::max(reference_steps(gp, track, scale) - 1.05f, 0.0f);
 }
 
 // How far ahead of the pelvis at heel strike a footprint lands: the lead of a whole step, shortened in proportion
@@ -583,11 +587,14 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   float hurry = 1.0f;
   if (source.agents() && lanes.ik_flags.components != 0) {
     const float sf_before = current_gait(g).stance_fraction();
+    // Whether leg l, in stance, lifts early this frame (nor is it hurried when the other leg's does).
+    auto stance_lifts_early = [&](int l) {
+      return g.leg(l, kLegSwinging) < 0.5f &&
+             lifts_early(frac(g[kGaitPhase] - 0.5f * static_cast<float>(l)), sf_before, base_style);
+    };
     for (int leg = 0; leg < 2; ++leg)
-      if (g.leg(leg, kLegSwinging) < 0.5f && unreachable(lanes, leg, i) &&
-          !lifts_early(frac(g[kGaitPhase] - 0.5f * static_cast<float>(leg)), sf_before, base_style) &&
-          !(g.leg(1 - leg, kLegSwinging) < 0.5f &&
-            lifts_early(frac(g[kGaitPhase] - 0.5f * static_cast<float>(1 - leg)), sf_before, base_style)))
+      if (g.leg(leg, kLegSwinging) < 0.5f && unreachable(lanes, leg, i) && !stance_lifts_early(leg) &&
+          !stance_lifts_early(1 - leg))
         hurry = base_style.stance_hurry;
   }
   const GaitClock clock =
@@ -629,7 +636,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     return {glm::mix(pelvis.position, window_end.position, u), pelvis.heading + u * heading_change};
   };
   const float sf = gp.stance_fraction();
-  const float step_ratio = std::clamp(gp.step_length * track.speed_ratio / (kReferenceStep * scale), 0.5f, 1.0f);
+  const float step_ratio = std::clamp(reference_steps(gp, track, scale), 0.5f, 1.0f);
   const float strike_pitch = style.heel_strike_pitch * step_ratio * step_ratio;
   // Each leg's ankle pose now and a little ahead. Ahead, a leg may change mode once: a stance leg lifts off
   // into the swing it will take (predicted exactly as the toe-off event will place it, at today's cadence), a
@@ -971,8 +978,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     // position, the one avoidance keeps clear of others, is untouched: the body trails its disc by centimetres
     // for a moment. A foot that landed beyond reach ahead holds the body too (it is the body that fell behind).
     // Rejected: only feet behind the hip holding it (the crossing's largest slide 88 -> 117 mm: pushed back in
-    // a jam, bodies recede from feet planted ahead), and footprints led along the velocity instead of the heading
-    // so a receding body steps backwards (largest slides 88 -> 107 mm crossing, 169 -> 191 mm plaza).
+    // a jam, bodies recede from feet planted ahead; footprint_lead's backward step came later).
     glm::vec3 back(0.0f);  // humanoid units
     for (int leg = 0; leg < 2; ++leg) {
       if (legs[leg].swinging || !binds[leg]) continue;
@@ -1096,7 +1102,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, goal, frame.to_humanoid(ankle[leg].orientation),
                IkMode::PositionOrientation);
   }
-  const float swing_scale = std::clamp(gp.step_length * track.speed_ratio / (kReferenceStep * scale), 0.3f, 1.6f);
+  const float swing_scale = std::clamp(reference_steps(gp, track, scale), 0.3f, 1.6f);
   for (int arm = 0; arm < 2; ++arm) {
     // Left arm back at left heel strike (phase 0), forward half a cycle later; the right arm the opposite.
     const float u = 4.0f * frac(phase + 0.5f * static_cast<float>(arm));
