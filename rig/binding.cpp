@@ -416,9 +416,21 @@ BindingTables load_binding_tables(std::string_view part_joints_json, std::string
     const Json root = parse_json(overrides_json, osrc);
     if (!root.is_object() || !root.contains("overrides") || !root["overrides"].is_array())
       throw LoadError(osrc + ": expected an object with an 'overrides' array");
-    check_keys(root, {"overrides"}, osrc);
+    check_keys(root, {"overrides", "step2_radii"}, osrc);
     const Json& list = root["overrides"];
     for (std::size_t i = 0; i < list.size(); ++i) tables.overrides.push_back(parse_selection(list[i], osrc, i));
+    if (root.contains("step2_radii")) {
+      const Json& radii = root["step2_radii"];
+      if (!radii.is_object()) throw LoadError(osrc + ": 'step2_radii' must be an object of joint names to metres");
+      for (const auto& [joint, radius] : radii.items()) {
+        const std::string where = osrc + ": step2_radii." + joint;
+        if (!known_joint_name(joint)) throw LoadError(where + ": unknown joint");
+        if (!radius.is_number() || !std::isfinite(radius.get<double>()) || radius.get<double>() <= 0.0 ||
+            radius.get<double>() > 1.0)
+          throw LoadError(where + ": the radius must be a number of metres in (0, 1]");
+        tables.step2_radii.emplace_back(joint, radius.get<float>());
+      }
+    }
   }
   return tables;
 }
@@ -441,6 +453,7 @@ const BindingTables& makehuman_binding_tables() {
     BindingTables t = default_binding_tables();
     BindingTables more = load_binding_tables("", *extra, "", "<embedded>/data/makehuman_binding_overrides.json");
     t.overrides.insert(t.overrides.end(), more.overrides.begin(), more.overrides.end());
+    t.step2_radii.insert(t.step2_radii.end(), more.step2_radii.begin(), more.step2_radii.end());
     return t;
   }();
   return tables;
@@ -515,7 +528,8 @@ void write_pretty(const OrderedJson& j, std::size_t indent, std::string& out) {
 
 }  // namespace
 
-std::string binding_overrides_json(std::span<const SkinSelection> overrides) {
+std::string binding_overrides_json(std::span<const SkinSelection> overrides,
+                                   std::span<const std::pair<std::string, float>> step2_radii) {
   OrderedJson list = OrderedJson::array();
   for (const SkinSelection& s : overrides) {
     OrderedJson e;
@@ -543,6 +557,11 @@ std::string binding_overrides_json(std::span<const SkinSelection> overrides) {
   OrderedJson root;
   root["_doc"] = {"Step-3 skin binding overrides, applied in order after the part table (steps 1-2).",
                   "Format and meaning of every field: the _doc of data/binding_overrides.json."};
+  if (!step2_radii.empty()) {
+    OrderedJson radii = OrderedJson::object();
+    for (const auto& [joint, radius] : step2_radii) radii[joint] = float_json(radius);
+    root["step2_radii"] = std::move(radii);
+  }
   root["overrides"] = std::move(list);
   std::string out;
   write_pretty(root, 0, out);
@@ -559,6 +578,8 @@ BindingTables load_binding_overrides_file(const std::filesystem::path& path, con
     throw LoadError(path.string() + ": empty file (expected {\"overrides\": [...]})");
   BindingTables tables = load_binding_tables("", text, "", path.string());
   tables.part_joints = base.part_joints;
+  // The body's step-2 radii stay (they are the body's, as its part table is); the file's own come after and win.
+  tables.step2_radii.insert(tables.step2_radii.begin(), base.step2_radii.begin(), base.step2_radii.end());
   return tables;
 }
 
@@ -599,8 +620,11 @@ SkinBinding bind_three_step(const Mesh& mesh, const Skeleton& skeleton, const Bi
     binding.joints[v][0] = static_cast<std::int16_t>(part_joint[mesh.part.empty() ? 0 : mesh.part[v]]);
     binding.weights[v][0] = 1.0f;
   }
-  for (const BlendJoint& bj : options.blend_joints)
+  for (BlendJoint bj : options.blend_joints) {
+    for (const auto& [joint, radius] : tables.step2_radii)  // the last entry for a joint wins, as overrides do
+      if (joint == bj.joint) bj.radius_m = radius;
     blend_near_joint(bj, mesh, skeleton, options.step2_weights, binding);
+  }
   if (options.apply_overrides)
     for (const SkinSelection& s : tables.overrides) apply_selection(s, mesh, skeleton, binding);
   return binding;

@@ -53,6 +53,9 @@ struct SkinSelection {
 struct BindingTables {
   std::vector<std::pair<std::string, std::string>> part_joints;  // part name -> joint name, in file order
   std::vector<SkinSelection> overrides;                          // applied in order
+  // Step-2 radii (m) this body sets for named joints in place of BindingOptions::blend_joints' (the overrides
+  // file's "step2_radii" object): a body whose knee is thicker than the default's needs a wider blend.
+  std::vector<std::pair<std::string, float>> step2_radii;
 
   // Joint name of a part, nullptr when the table has no entry.
   const std::string* joint_of_part(std::string_view part) const;
@@ -64,11 +67,14 @@ struct BindingTables {
 BindingTables load_binding_tables(std::string_view part_joints_json, std::string_view overrides_json,
                                   std::string_view part_joints_source = "part_joints.json",
                                   std::string_view overrides_source = "binding_overrides.json");
-// The inverse of the overrides half of load_binding_tables: a pretty-printed {"_doc": ..., "overrides": [...]}
-// that loads back to the same selections field by field (floats are written so they parse to the same float).
-std::string binding_overrides_json(std::span<const SkinSelection> overrides);
+// The inverse of the overrides half of load_binding_tables: a pretty-printed {"_doc": ..., "step2_radii": {...},
+// "overrides": [...]} that loads back to the same selections and radii field by field (floats are written so they
+// parse to the same float; no "step2_radii" key when there are none).
+std::string binding_overrides_json(std::span<const SkinSelection> overrides,
+                                   std::span<const std::pair<std::string, float>> step2_radii = {});
 
-// `base`'s part table with the overrides of the file at `path` in place of base's overrides (`strata crowd
+// `base`'s part table and step-2 radii with the overrides of the file at `path` in place of base's overrides
+// (the file's own step2_radii, if any, after base's) (`strata crowd
 // --binding-overrides`, the binding editor's saved files). Throws LoadError naming the file (and the entry).
 BindingTables load_binding_overrides_file(const std::filesystem::path& path, const BindingTables& base);
 

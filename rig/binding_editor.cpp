@@ -404,7 +404,7 @@ void BindingEditor::weight_colors(int joint, bool show_selection, std::span<std:
 }
 
 void BindingEditor::save(const std::filesystem::path& path) const {
-  write_file_atomically(path, binding_overrides_json(tables_.overrides));
+  write_file_atomically(path, binding_overrides_json(tables_.overrides, tables_.step2_radii));
 }
 
 }  // namespace strata

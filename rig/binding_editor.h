@@ -125,7 +125,7 @@ class BindingEditor {
   // A joint out of range has weight 0 everywhere. Throws std::invalid_argument when rgba is not one per vertex.
   void weight_colors(int joint, bool show_selection, std::span<std::uint32_t> rgba) const;
 
-  // Writes binding_overrides_json(tables().overrides) atomically (io/atomic_file.h). Throws on I/O failure.
+  // Writes binding_overrides_json(tables().overrides, tables().step2_radii) atomically (io/atomic_file.h). Throws on I/O failure.
   void save(const std::filesystem::path& path) const;
 
  private:

@@ -30,7 +30,8 @@ inline constexpr ShippedBody kDefaultShippedBody = ShippedBody::MakeHuman;
 const char* shipped_body_name(ShippedBody body);  // "makehuman", "procedural"
 std::optional<ShippedBody> parse_shipped_body(std::string_view name);
 const BodyLevels& shipped_body_levels(ShippedBody body = kDefaultShippedBody);
-// The binding tables each is bound with (rig/binding.h): the shipped ones, plus the MakeHuman body's own knees.
+// The binding tables each is bound with (rig/binding.h): the shipped ones, plus the MakeHuman body's own knee
+// step-2 radii (data/makehuman_binding_overrides.json).
 const BindingTables& shipped_binding_tables(ShippedBody body = kDefaultShippedBody);
 
 // A shipped body, its three levels and its subdivision cage, bound to the shipped default skeleton, built once

@@ -551,6 +551,24 @@ TEST(BindingOverridesJson, RoundTripsTheShippedFileFieldByField) {
   EXPECT_EQ(text.find("0.93999"), std::string::npos) << text;
   EXPECT_NE(text.find("data/binding_overrides.json"), std::string::npos);
   EXPECT_EQ(binding_overrides_json(again.overrides), text) << "serialising is deterministic";
+  EXPECT_EQ(text.find("step2_radii"), std::string::npos) << "no radii, no key";
+}
+
+TEST(BindingOverridesJson, RoundTripsTheMakeHumanBodysStepTwoRadii) {
+  const BindingTables& makehuman = shipped_binding_tables(ShippedBody::MakeHuman);
+  ASSERT_FALSE(makehuman.step2_radii.empty());
+  const std::string text = binding_overrides_json(makehuman.overrides, makehuman.step2_radii);
+  EXPECT_NE(text.find("\"l_knee\": 0.1"), std::string::npos) << text;
+  const BindingTables again = load_binding_tables("", text, "", "serialised");
+  EXPECT_EQ(again.step2_radii, makehuman.step2_radii);
+  EXPECT_EQ(again.overrides.size(), makehuman.overrides.size());
+  // An overrides file loaded onto the body keeps the body's radii (a file without any, as older saves are).
+  const fs::path file = scratch("no_radii.json");
+  {
+    std::ofstream out(file);
+    out << R"({"overrides": []})";
+  }
+  EXPECT_EQ(load_binding_overrides_file(file, makehuman).step2_radii, makehuman.step2_radii);
 }
 
 TEST(BindingOverridesJson, RandomSelectionsRoundTripExactly) {

@@ -267,6 +267,29 @@ TEST(Binding, StepTwoBlendsExactlyTheVerticesNearTheElbow) {
   }
 }
 
+// A body's tables may widen one joint's step-2 sphere (data/makehuman_binding_overrides.json's knees): the radius
+// from the tables replaces the options' for that joint alone, exactly as if the options had said it.
+TEST(Binding, TablesStepTwoRadiusReplacesTheOptionsForThatJoint) {
+  const Skeleton sk = arm_skeleton();
+  const Mesh mesh = arm_mesh();
+  BindingOptions opt;
+  opt.blend_joints = {{"l_elbow", 0.07f}, {"l_wrist", 0.05f}};
+  const BindingTables wider = arm_tables(R"({"step2_radii": {"l_elbow": 0.09}, "overrides": []})");
+  ASSERT_EQ(wider.step2_radii.size(), 1u);
+  const SkinBinding from_tables = bind_three_step(mesh, sk, wider, opt);
+  BindingOptions said = opt;
+  said.blend_joints[0].radius_m = 0.09f;
+  const SkinBinding from_options = bind_three_step(mesh, sk, arm_tables(), said);
+  EXPECT_EQ(from_tables.joints, from_options.joints);
+  EXPECT_EQ(from_tables.weights, from_options.weights);
+  // Wider than the options' 0.07 m: more vertices blend (rings within sqrt(0.09^2 - 0.04^2) = 0.081 m).
+  EXPECT_GT(binding_stats(from_tables).two_joints, binding_stats(bind_three_step(mesh, sk, arm_tables(), opt)).two_joints);
+  // A radius for a joint the options do not blend adds nothing (step 2's joints are the options' to choose).
+  const BindingTables shoulder_only = arm_tables(R"({"step2_radii": {"l_shoulder": 0.2}, "overrides": []})");
+  const SkinBinding unchanged = bind_three_step(mesh, sk, shoulder_only, opt);
+  EXPECT_EQ(unchanged.weights, bind_three_step(mesh, sk, arm_tables(), opt).weights);
+}
+
 TEST(Binding, SmoothStepTwoIsHalfAtTheCreaseAndMonotoneAlongTheArm) {
   const Skeleton sk = arm_skeleton();
   const Mesh mesh = arm_mesh();
@@ -539,6 +562,11 @@ TEST(BindingTables, LoaderErrorsNameFileAndEntry) {
   expect_load_error("", R"({"overrides": [{"vertices": [1], "blend": "harmonic", "falloff_m": 0.02}]})",
                     "no 'joints' or 'falloff_m'");
   expect_load_error("", R"({"overrides": [{"vertices": [1], "radius": 2}]})", "unknown key 'radius'");
+  expect_load_error("", R"({"step2_radii": [0.1], "overrides": []})", "my_overrides.json: 'step2_radii' must be an object");
+  expect_load_error("", R"({"step2_radii": {"l_kne": 0.1}, "overrides": []})", "step2_radii.l_kne: unknown joint");
+  expect_load_error("", R"({"step2_radii": {"l_knee": "wide"}, "overrides": []})", "step2_radii.l_knee: the radius");
+  expect_load_error("", R"({"step2_radii": {"l_knee": 0}, "overrides": []})", "step2_radii.l_knee: the radius");
+  expect_load_error("", R"({"step2_radii": {"l_knee": 3}, "overrides": []})", "in (0, 1]");
 }
 
 TEST(BindingTables, AcceptsHanim2019JointNamesAndComments) {

@@ -190,6 +190,53 @@ TEST(MakeHumanBody, FitsTheSkeletonCrownSolesFeetAndHands) {
   EXPECT_GT(closest, 1e-3f);
 }
 
+// The area centroid, from `o`, of the closed cut of the triangles of `parts` by the plane through `o` across `axis`.
+glm::dvec3 section_centroid_offset(const Mesh& m, std::initializer_list<const char*> parts, const glm::dvec3& o,
+                                   const glm::dvec3& axis) {
+  double area = 0.0;
+  glm::dvec3 moment(0.0);
+  for (std::size_t t = 0; t + 2 < m.triangles.size(); t += 3) {
+    const std::uint32_t i[3] = {m.triangles[t], m.triangles[t + 1], m.triangles[t + 2]};
+    if (!is_part(m, i[0], parts) || !is_part(m, i[1], parts) || !is_part(m, i[2], parts)) continue;
+    glm::dvec3 p[3];
+    double d[3];
+    for (int k = 0; k < 3; ++k) p[k] = glm::dvec3(m.positions[i[k]]), d[k] = glm::dot(p[k] - o, axis);
+    glm::dvec3 q[2];
+    int found = 0;
+    for (int k = 0; k < 3 && found < 2; ++k) {
+      const int l = (k + 1) % 3;
+      if ((d[k] < 0.0) != (d[l] < 0.0)) q[found++] = p[k] + (d[k] / (d[k] - d[l])) * (p[l] - p[k]);
+    }
+    if (found < 2) continue;
+    if (glm::dot(glm::cross(q[1] - q[0], axis), glm::cross(p[1] - p[0], p[2] - p[0])) < 0.0) std::swap(q[0], q[1]);
+    const double a = 0.5 * glm::dot(axis, glm::cross(q[0] - o, q[1] - o));
+    area += a;
+    moment += a * ((q[0] - o) + (q[1] - o)) / 3.0;
+  }
+  EXPECT_GT(area, 20e-4) << "the cut misses the limb";  // an elbow's section is ~43 cm2, a knee's ~100 cm2
+  const glm::dvec3 e = moment / area;
+  return e - glm::dot(e, axis) * axis;
+}
+
+// Elbows and knees bend about their limb's middle: MakeHuman's own elbow sat 1.8 cm behind its arm's, its knee 0.8
+// cm in front of its leg's, and a limb bent about an axis off its middle loses volume (Pappus; at 120 deg dual
+// quaternions lost 34 % of the elbow). The fit moves each hinge's source centre onto the middle of the fitted limb.
+TEST(MakeHumanBody, ElbowsAndKneesBendAboutTheirLimbsMiddle) {
+  const Skeleton& sk = load_default_humanoid().skeleton;
+  const Mesh& m = body().levels[0];
+  struct Hinge {
+    const char *joint, *child, *upper, *lower;
+  };
+  for (const Hinge& h : {Hinge{"l_elbow", "l_wrist", "lShldr", "lForeArm"}, Hinge{"r_elbow", "r_wrist", "rShldr", "rForeArm"},
+                         Hinge{"l_knee", "l_ankle", "lThigh", "lShin"}, Hinge{"r_knee", "r_ankle", "rThigh", "rShin"}}) {
+    const glm::dvec3 c(sk.centers[static_cast<std::size_t>(sk.find_joint(h.joint))]);
+    const glm::dvec3 down = glm::normalize(glm::dvec3(sk.centers[static_cast<std::size_t>(sk.find_joint(h.child))]) - c);
+    const glm::dvec3 offset = section_centroid_offset(m, {h.upper, h.lower}, c, down);
+    EXPECT_LT(glm::length(offset), 3e-3) << h.joint << ": the limb's middle is " << 1000.0 * offset.x << ", "
+                                         << 1000.0 * offset.y << ", " << 1000.0 * offset.z << " mm off the joint";
+  }
+}
+
 TEST(MakeHumanBody, FollowsAnotherSkeletonsSize) {
   // The default skeleton scaled by 1.1 about the floor: the body grows with it.
   Skeleton big = load_default_humanoid().skeleton;
