@@ -54,7 +54,10 @@ int run_export(const ExportOptions& o) {
                                                                                       std::to_string(o.level));
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "strata export: wrote " << o.out << " (" << stats.bytes << " bytes): level " << o.level << ", "
-              << stats.vertices << " vertices, " << stats.triangles << " triangles, " << stats.joints << " joints";
+              << stats.vertices << " vertices";
+    if (stats.written_vertices != stats.vertices)
+      std::cout << " (" << stats.written_vertices << " in the file: split at UV seams)";
+    std::cout << ", " << stats.triangles << " triangles, " << stats.joints << " joints";
     if (!o.rest) std::cout << ", walk " << walk.clip.duration << " s in " << stats.keys << " keys";
     std::cout << ", " << wall << " s\n";
   } catch (const std::exception& e) {

@@ -18,7 +18,11 @@ struct Mesh {
   std::string name;
   std::vector<glm::vec3> positions;      // rest positions
   std::vector<glm::vec3> normals;        // unit, per vertex (may be empty until compute_normals)
-  std::vector<glm::vec2> uvs;            // optional, per vertex
+  std::vector<glm::vec2> uvs;            // optional, per vertex; texture space with v up (OBJ's and OpenGL's)
+  // Optional face-varying texture coordinates: one per triangle corner, in the order of `triangles`, so a UV seam
+  // needs no split vertex (a split would change the vertex counts and open the surface for the binder and the
+  // collapse). Importers with seams and the derived MakeHuman body fill these; `uvs` stays for seamless meshes.
+  std::vector<glm::vec2> corner_uvs;
   std::vector<std::uint32_t> triangles;  // 3 indices per triangle, counter-clockwise seen from outside
   std::vector<std::uint16_t> part;       // per vertex: index into part_names
   std::vector<std::string> part_names;

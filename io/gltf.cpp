@@ -535,7 +535,8 @@ class GltfReader {
       if (all_uvs) {
         const std::vector<float> uv = floats(a.at("TEXCOORD_0"), TINYGLTF_TYPE_VEC2, "TEXCOORD_0");
         check_count(uv.size() / 2, "TEXCOORD_0", a.at("TEXCOORD_0"));
-        for (std::size_t i = 0; i < count; ++i) mesh.uvs.emplace_back(uv[2 * i], uv[2 * i + 1]);
+        // glTF's v runs down from the image's top; Mesh's, as OBJ's and OpenGL's, up from its bottom.
+        for (std::size_t i = 0; i < count; ++i) mesh.uvs.emplace_back(uv[2 * i], 1.0f - uv[2 * i + 1]);
       }
       const std::vector<std::uint32_t> joints = integers(a.at("JOINTS_0"), TINYGLTF_TYPE_VEC4, "JOINTS_0");
       check_count(joints.size() / 4, "JOINTS_0", a.at("JOINTS_0"));

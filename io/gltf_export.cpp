@@ -201,8 +201,45 @@ GltfExportStats write_gltf_binary(const std::filesystem::path& path, const Skele
   model.skins.push_back(skin);
 
   // --- mesh ----------------------------------------------------------------------------------------------------
-  std::vector<float> positions(3 * vertices), normals(3 * vertices), weights(4 * vertices);
-  std::vector<std::uint16_t> joint_indices(4 * vertices);
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+    if (mesh.triangles[i] >= vertices)
+      out.fail("triangle " + std::to_string(i / 3) + ": index " + std::to_string(mesh.triangles[i]) + " of " +
+               std::to_string(vertices) + " vertices");
+  if (mesh.triangles.size() % 3) out.fail("the index count is not a multiple of 3");
+  // Texture coordinates: per vertex as they are, or per corner (face-varying), where glTF's per-vertex attributes
+  // need a vertex split at every UV seam: one written vertex per distinct (vertex, uv) pair, in first-use order.
+  const bool corner_uvs = mesh.corner_uvs.size() == mesh.triangles.size();
+  const bool vertex_uvs = !corner_uvs && mesh.uvs.size() == vertices;
+  std::vector<std::uint32_t> written_of(vertices);  // the source vertex of each written vertex
+  std::vector<glm::vec2> written_uv;
+  std::vector<std::uint32_t> indices(mesh.triangles.begin(), mesh.triangles.end());
+  if (corner_uvs) {
+    written_of.clear();
+    std::vector<std::vector<std::uint32_t>> splits(vertices);  // per source vertex, its written vertices
+    for (std::size_t c = 0; c < indices.size(); ++c) {
+      const std::uint32_t v = mesh.triangles[c];
+      const glm::vec2 uv = mesh.corner_uvs[c];
+      if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+        out.fail("triangle " + std::to_string(c / 3) + ": texture coordinate is not finite");
+      std::uint32_t w = 0;
+      bool found = false;
+      for (const std::uint32_t s : splits[v])
+        if (written_uv[s] == uv) w = s, found = true;
+      if (!found) {
+        w = static_cast<std::uint32_t>(written_of.size());
+        written_of.push_back(v);
+        written_uv.push_back(uv);
+        splits[v].push_back(w);
+      }
+      indices[c] = w;
+    }
+  } else {
+    for (std::size_t v = 0; v < vertices; ++v) written_of[v] = static_cast<std::uint32_t>(v);
+    if (vertex_uvs) written_uv = mesh.uvs;
+  }
+  const std::size_t written = written_of.size();
+  std::vector<float> positions(3 * written), normals(3 * written), weights(4 * written), uvs;
+  std::vector<std::uint16_t> joint_indices(4 * written);
   Mesh with_normals;
   const std::vector<glm::vec3>* source_normals = &mesh.normals;
   if (mesh.normals.size() != vertices) {
@@ -210,23 +247,24 @@ GltfExportStats write_gltf_binary(const std::filesystem::path& path, const Skele
     compute_normals(with_normals);
     source_normals = &with_normals.normals;
   }
-  for (std::size_t v = 0; v < vertices; ++v) {
+  for (std::size_t w = 0; w < written; ++w) {
+    const std::size_t v = written_of[w];
     const glm::vec3 p = mesh.positions[v];
     if (!finite(p)) out.fail("vertex " + std::to_string(v) + ": position is not finite");
     glm::vec3 n = (*source_normals)[v];
     const float len = glm::length(n);
     n = std::isfinite(len) && len > 1e-12f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);  // glTF normals are unit
-    for (int c = 0; c < 3; ++c) positions[3 * v + c] = p[c], normals[3 * v + c] = n[c];
+    for (int c = 0; c < 3; ++c) positions[3 * w + c] = p[c], normals[3 * w + c] = n[c];
     std::array<std::uint16_t, 4> js;
     std::array<float, 4> ws;
     skin_row(level.binding, v, joints, out, js, ws);
-    for (int c = 0; c < 4; ++c) joint_indices[4 * v + c] = js[c], weights[4 * v + c] = ws[c];
+    for (int c = 0; c < 4; ++c) joint_indices[4 * w + c] = js[c], weights[4 * w + c] = ws[c];
   }
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
-    if (mesh.triangles[i] >= vertices)
-      out.fail("triangle " + std::to_string(i / 3) + ": index " + std::to_string(mesh.triangles[i]) + " of " +
-               std::to_string(vertices) + " vertices");
-  if (mesh.triangles.size() % 3) out.fail("the index count is not a multiple of 3");
+  if (!written_uv.empty()) {
+    // glTF's texture space has v down from the top-left corner; OBJ's (and Mesh's) v goes up from the bottom.
+    uvs.reserve(2 * written);
+    for (const glm::vec2& uv : written_uv) uvs.push_back(uv.x), uvs.push_back(1.0f - uv.y);
+  }
 
   tinygltf::Primitive prim;
   prim.mode = TINYGLTF_MODE_TRIANGLES;
@@ -238,13 +276,16 @@ GltfExportStats write_gltf_binary(const std::filesystem::path& path, const Skele
                                                  TINYGLTF_TYPE_VEC4, 4, kArrayBuffer, false);
   prim.attributes["WEIGHTS_0"] =
       out.add_accessor(weights, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, 4, kArrayBuffer, false);
+  if (!uvs.empty())
+    prim.attributes["TEXCOORD_0"] =
+        out.add_accessor(uvs, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, 2, kArrayBuffer, false);
   // 65,535 is the primitive-restart value of unsigned short indices and may not be used as an index.
-  if (vertices < 65535) {
-    const std::vector<std::uint16_t> idx(mesh.triangles.begin(), mesh.triangles.end());
+  if (written < 65535) {
+    const std::vector<std::uint16_t> idx(indices.begin(), indices.end());
     prim.indices = out.add_accessor(idx, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_SCALAR, 1,
                                     kElementArrayBuffer, false);
   } else {
-    prim.indices = out.add_accessor(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, 1,
+    prim.indices = out.add_accessor(indices, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, 1,
                                     kElementArrayBuffer, false);
   }
   tinygltf::Material material;
@@ -366,6 +407,7 @@ GltfExportStats write_gltf_binary(const std::filesystem::path& path, const Skele
 
   GltfExportStats stats;
   stats.vertices = vertices;
+  stats.written_vertices = written;
   stats.triangles = mesh.triangle_count();
   stats.joints = joints;
   stats.keys = keys;

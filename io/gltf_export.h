@@ -36,6 +36,9 @@ struct ExportError : std::runtime_error {
 
 struct GltfExportStats {
   std::size_t vertices = 0, triangles = 0, joints = 0, keys = 0, bytes = 0;
+  // Vertices in the file: `vertices`, plus one per extra texture coordinate a UV seam gives a vertex (a mesh with
+  // corner_uvs is split there, glTF's attributes being per vertex).
+  std::size_t written_vertices = 0;
 };
 
 // Writes `level` (bound to `skeleton`) and, when given, `clip` to `path` as GLB. Throws ExportError naming the

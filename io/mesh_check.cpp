@@ -35,6 +35,12 @@ void validate_mesh(const Mesh& mesh, std::string_view source) {
   }
   check_length(mesh.normals.size(), "normals");
   check_length(mesh.uvs.size(), "uvs");
+  if (!mesh.corner_uvs.empty() && mesh.corner_uvs.size() != mesh.triangles.size())
+    throw LoadError(where + ": corner uvs has " + std::to_string(mesh.corner_uvs.size()) + " entries for " +
+                    std::to_string(mesh.triangles.size()) + " triangle corners");
+  for (std::size_t c = 0; c < mesh.corner_uvs.size(); ++c)
+    if (!std::isfinite(mesh.corner_uvs[c].x) || !std::isfinite(mesh.corner_uvs[c].y))
+      throw LoadError(where + ": triangle " + std::to_string(c / 3) + " has a non-finite texture coordinate");
   check_length(mesh.part.size(), "part ids");
   for (std::size_t v = 0; v < mesh.part.size(); ++v)
     if (mesh.part[v] >= mesh.part_names.size())

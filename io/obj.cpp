@@ -177,7 +177,7 @@ class ObjParser {
     // A per-vertex attribute survives only if every corner of a vertex names the same value.
     const std::size_t n = mesh.positions.size();
     std::vector<std::int32_t> uv_of(n, -1), normal_of(n, -1);
-    bool uv_ok = true, normal_ok = true;
+    bool uv_ok = true, normal_ok = true, corner_uv_ok = true;
     auto consistent = [](std::int32_t& slot, std::int32_t index, auto const& values) {
       if (index < 0) return false;
       if (slot < 0 || slot == index) {
@@ -191,10 +191,14 @@ class ObjParser {
       for (const Corner& c : tri.c) {
         const std::uint32_t v = static_cast<std::uint32_t>(remap[c.v]);
         mesh.triangles.push_back(v);
+        // Face-varying: every corner with its own vt, seams allowed.
+        if (corner_uv_ok && c.vt >= 0) mesh.corner_uvs.push_back(uvs_[static_cast<std::size_t>(c.vt)]);
+        corner_uv_ok = corner_uv_ok && c.vt >= 0;
         if (uv_ok) uv_ok = consistent(uv_of[v], c.vt, uvs_);
         if (normal_ok) normal_ok = consistent(normal_of[v], c.vn, normals_);
       }
     }
+    if (!corner_uv_ok) mesh.corner_uvs.clear();
     if (uv_ok && n > 0) {
       mesh.uvs.resize(n);
       for (std::size_t v = 0; v < n; ++v) mesh.uvs[v] = uvs_[uv_of[v]];

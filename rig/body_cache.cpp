@@ -18,7 +18,8 @@
 namespace strata {
 namespace {
 
-constexpr char kMagic[8] = {'S', 'T', 'R', 'B', 'O', 'D', 'Y', '1'};
+// Version 2: meshes carry corner_uvs.
+constexpr char kMagic[8] = {'S', 'T', 'R', 'B', 'O', 'D', 'Y', '2'};
 constexpr std::uint64_t kMaxElements = 1u << 26;  // refuses absurd counts from a corrupt file before allocating
 
 
@@ -53,6 +54,7 @@ void write_mesh(std::ofstream& out, const Mesh& m) {
   write_vector(out, m.positions);
   write_vector(out, m.normals);
   write_vector(out, m.uvs);
+  write_vector(out, m.corner_uvs);
   write_vector(out, m.triangles);
   write_vector(out, m.part);
   write_vector(out, std::vector<std::uint64_t>{m.part_names.size()});
@@ -62,7 +64,7 @@ void write_mesh(std::ofstream& out, const Mesh& m) {
 bool read_mesh(std::ifstream& in, Mesh& m) {
   std::vector<std::uint64_t> parts;
   if (!read_string(in, m.name) || !read_vector(in, m.positions) || !read_vector(in, m.normals) ||
-      !read_vector(in, m.uvs) || !read_vector(in, m.triangles) || !read_vector(in, m.part) ||
+      !read_vector(in, m.uvs) || !read_vector(in, m.corner_uvs) || !read_vector(in, m.triangles) || !read_vector(in, m.part) ||
       !read_vector(in, parts) || parts.size() != 1 || parts[0] > 4096)
     return false;
   m.part_names.resize(parts[0]);

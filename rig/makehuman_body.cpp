@@ -20,6 +20,7 @@
 #include "rig/body_cache.h"
 #include "rig/subdiv_refiner.h"
 #include "rig/surface_simplify.h"
+#include "rig/uv_transfer.h"
 
 namespace strata {
 namespace {
@@ -382,10 +383,14 @@ BodyLevels derive_makehuman_body(const MakeHumanSource& source, const Skeleton& 
   // Parts follow each vertex back to the source vertex it descends from. Taking the nearest source vertex's
   // part was the first version: the thigh under a hanging thumb took the thumb's part, was bound to the wrist and
   // tore over the walk.
+  // MakeHuman's texture coordinates, projected onto each level from the fitted source (rig/uv_transfer.h).
+  const UvSource uv_source{fitted, source.triangles, source.corner_uvs};
   auto to_mesh = [&](SimplifiedSurface s, const std::vector<std::uint32_t>& origin, const std::string& name) {
     const std::vector<std::uint32_t> from = std::move(s.source_vertex);  // body_level_mesh needs only the rest
-    return body_level_mesh(std::move(s), name,
-                           [&](std::size_t v, const glm::vec3&) { return source.part[origin[from[v]]]; });
+    Mesh mesh = body_level_mesh(std::move(s), name,
+                                [&](std::size_t v, const glm::vec3&) { return source.part[origin[from[v]]]; });
+    if (!source.corner_uvs.empty()) mesh.corner_uvs = transfer_corner_uvs(uv_source, mesh);
+    return mesh;
   };
   BodyLevels out;
   SimplifiedSurface prev{refined.positions, refined.triangles, {}};
@@ -414,7 +419,7 @@ MakeHumanSource shipped_makehuman_source() {
 const BodyLevels& makehuman_default_body() {
   static const BodyLevels body = [] {
     // Bump when the derivation's output changes, so stale cache files are ignored.
-    constexpr std::uint32_t kDerivationVersion = 3;
+    constexpr std::uint32_t kDerivationVersion = 4;
     const Skeleton skeleton = load_default_humanoid().skeleton;
     const BodyOptions options;
     // The key covers the skeleton, the options, the version and the shipped source's bytes (a re-packed source

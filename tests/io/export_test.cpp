@@ -6,6 +6,8 @@
 #include "tests/temp_dir.h"
 #include <nlohmann/json.hpp>
 
+#include <array>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -63,7 +65,7 @@ struct Glb {
   std::vector<T> accessor(int index) const {
     const auto& a = json.at("accessors").at(index);
     const auto& view = json.at("bufferViews").at(a.at("bufferView").get<int>());
-    static const std::map<std::string, int> kComponents = {{"SCALAR", 1}, {"VEC3", 3}, {"VEC4", 4}, {"MAT4", 16}};
+    static const std::map<std::string, int> kComponents = {{"SCALAR", 1}, {"VEC2", 2}, {"VEC3", 3}, {"VEC4", 4}, {"MAT4", 16}};
     const std::size_t n = a.at("count").get<std::size_t>() * kComponents.at(a.at("type").get<std::string>());
     const std::size_t offset = view.value("byteOffset", 0u) + a.value("byteOffset", 0u);
     EXPECT_LE(offset + n * sizeof(T), bin.size());
@@ -133,6 +135,35 @@ glm::vec3 relative_to_start(const EngineWalker& w, const glm::vec3& p) {
   return {c * d.x - s * d.z, d.y, s * d.x + c * d.z};  // Ry(-heading)
 }
 
+// Per vertex of a mesh read back from an export, the exported mesh's vertex at its position (within 1e-5 m, the
+// importer's float round trip): the exporter splits a vertex only where a UV seam gives it two texture
+// coordinates, and no two of the shipped body's vertices are that close, so the nearest is the one.
+std::vector<std::uint32_t> source_vertices(const Mesh& imported, const Mesh& exported) {
+  constexpr float kCell = 1e-3f;
+  auto cell = [&](const glm::vec3& p) {
+    return std::array<int, 3>{int(std::floor(p.x / kCell)), int(std::floor(p.y / kCell)), int(std::floor(p.z / kCell))};
+  };
+  std::map<std::array<int, 3>, std::vector<std::uint32_t>> grid;
+  for (std::uint32_t v = 0; v < exported.vertex_count(); ++v) grid[cell(exported.positions[v])].push_back(v);
+  std::vector<std::uint32_t> source(imported.vertex_count(), 0);
+  for (std::size_t w = 0; w < imported.vertex_count(); ++w) {
+    const glm::vec3 p = imported.positions[w];
+    const std::array<int, 3> c = cell(p);
+    float best = 1e-5f;
+    bool found = false;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == grid.end()) continue;
+          for (const std::uint32_t v : it->second)
+            if (const float d = glm::length(exported.positions[v] - p); d <= best) best = d, source[w] = v, found = true;
+        }
+    EXPECT_TRUE(found) << "imported vertex " << w << " is no exported vertex";
+  }
+  return source;
+}
+
 class ExportLevels : public ::testing::TestWithParam<int> {};
 
 TEST_P(ExportLevels, RoundTripsThroughTheImporter) {
@@ -146,9 +177,25 @@ TEST_P(ExportLevels, RoundTripsThroughTheImporter) {
   EXPECT_EQ(stats.keys, 31u);
 
   const ImportedBody imported = load_gltf(file);
-  EXPECT_EQ(imported.mesh.vertex_count(), body.mesh.vertex_count());
+  // The body's texture coordinates are per corner; the file splits a vertex at each UV seam (8 % more at level 0).
+  ASSERT_EQ(body.mesh.corner_uvs.size(), body.mesh.triangles.size());
+  EXPECT_EQ(stats.vertices, body.mesh.vertex_count());
+  EXPECT_EQ(imported.mesh.vertex_count(), stats.written_vertices);
+  EXPECT_GT(stats.written_vertices, body.mesh.vertex_count());
+  EXPECT_LT(stats.written_vertices, body.mesh.vertex_count() * 23 / 20);  // 7.6 % at level 0
   EXPECT_EQ(imported.mesh.triangle_count(), body.mesh.triangle_count());
-  EXPECT_EQ(imported.mesh.triangles, body.mesh.triangles);
+  const std::vector<std::uint32_t> source = source_vertices(imported.mesh, body.mesh);
+  std::vector<std::uint8_t> seen(body.mesh.vertex_count(), 0);
+  ASSERT_EQ(imported.mesh.uvs.size(), imported.mesh.vertex_count()) << "TEXCOORD_0 read back";
+  double worst_uv = 0.0;
+  for (std::size_t c = 0; c < body.mesh.triangles.size(); ++c) {
+    ASSERT_EQ(source[imported.mesh.triangles[c]], body.mesh.triangles[c]) << "corner " << c;
+    seen[body.mesh.triangles[c]] = 1;
+    worst_uv = std::max(worst_uv, double(glm::length(imported.mesh.uvs[imported.mesh.triangles[c]] -
+                                                      body.mesh.corner_uvs[c])));
+  }
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<std::ptrdiff_t>(body.mesh.vertex_count()));
+  EXPECT_LT(worst_uv, 1e-6) << "each corner's texture coordinate, through glTF's flipped v and back";
   ASSERT_EQ(imported.skeleton.joint_count(), rig.skeleton.joint_count());
   // Same names, same tree, same centres (the importer's centres are the joints' default-pose positions).
   std::vector<int> rig_joint(imported.skeleton.joint_count(), -1);
@@ -165,12 +212,13 @@ TEST_P(ExportLevels, RoundTripsThroughTheImporter) {
   }
   // Rest mesh and binding survive: positions, and the weight of every rig joint on every vertex.
   double worst_position = 0.0, worst_weight = 0.0;
-  for (std::size_t v = 0; v < body.mesh.vertex_count(); ++v) {
-    worst_position = std::max(worst_position, double(glm::length(imported.mesh.positions[v] - body.mesh.positions[v])));
+  for (std::size_t w = 0; w < imported.mesh.vertex_count(); ++w) {
+    const std::size_t v = source[w];
+    worst_position = std::max(worst_position, double(glm::length(imported.mesh.positions[w] - body.mesh.positions[v])));
     std::map<int, float> a, b;
     for (int k = 0; k < kMaxInfluences; ++k) {
       if (body.binding.weights[v][k] > 0) a[body.binding.joints[v][k]] += body.binding.weights[v][k];
-      if (imported.skin.weights[v][k] > 0) b[rig_joint[imported.skin.joints[v][k]]] += imported.skin.weights[v][k];
+      if (imported.skin.weights[w][k] > 0) b[rig_joint[imported.skin.joints[w][k]]] += imported.skin.weights[w][k];
     }
     ASSERT_EQ(a.size(), b.size()) << "vertex " << v;
     for (const auto& [joint, weight] : a) worst_weight = std::max(worst_weight, double(std::abs(b[joint] - weight)));
@@ -188,16 +236,19 @@ TEST_P(ExportLevels, FileHasNormalisedWeightsAndTheBoundsTheValidatorRequires) {
   const Rig& rig = shipped_rig();
   const fs::path file = scratch_dir() / ("raw_" + std::to_string(level) + ".glb");
   const BakedWalk walk = bake_walk(rig, {0.5f, 30.0f, 1});
-  write_gltf_binary(file, rig.skeleton, rig.body->levels[level], &walk.clip);
+  const GltfExportStats stats = write_gltf_binary(file, rig.skeleton, rig.body->levels[level], &walk.clip);
   const Glb glb = read_glb(file);
   ASSERT_FALSE(glb.json.is_null());
   const auto& prim = glb.json.at("meshes").at(0).at("primitives").at(0);
   const auto& attributes = prim.at("attributes");
+  const std::vector<float> texcoords = glb.accessor<float>(attributes.at("TEXCOORD_0"));
+  EXPECT_EQ(texcoords.size(), 2 * stats.written_vertices);
+  for (const float t : texcoords) ASSERT_TRUE(t >= 0.0f && t <= 1.0f) << "MakeHuman's texture space is the unit square";
   const auto& joints_accessor = glb.json.at("accessors").at(attributes.at("JOINTS_0").get<int>());
   EXPECT_EQ(joints_accessor.at("componentType"), 5123) << "JOINTS_0 as unsigned short";
   const std::vector<float> weights = glb.accessor<float>(attributes.at("WEIGHTS_0"));
   const std::vector<std::uint16_t> joints = glb.accessor<std::uint16_t>(attributes.at("JOINTS_0"));
-  ASSERT_EQ(weights.size(), 4 * rig.body->levels[level].mesh.vertex_count());
+  ASSERT_EQ(weights.size(), 4 * stats.written_vertices);
   std::size_t one = 0, two = 0;
   for (std::size_t v = 0; v < weights.size() / 4; ++v) {
     double sum = 0.0;
@@ -290,15 +341,19 @@ TEST(ExportPose, ImportedClipMatchesTheEngineWalkerAtHalfASecond) {
   EXPECT_GT(moved, 0.3) << "half a second of walking moves the joints well away from the rest pose";
 
   // Skinned vertices, both in mesh order (each scene's layout maps back to the mesh vertex).
+  // The imported mesh has the exported one's vertices plus its UV seams' splits, each at its source's position.
   const SkinnedCrowd& sa = current_skinned(replay);
   const SkinnedCrowd& sb = current_skinned(*engine.scene);
-  ASSERT_EQ(sa.vertex_count, sb.vertex_count);
+  ASSERT_EQ(sa.vertex_count, imported.mesh.vertex_count());
+  ASSERT_EQ(sb.vertex_count, rig.body->levels[kLevel].mesh.vertex_count());
+  const std::vector<std::uint32_t> source = source_vertices(imported.mesh, rig.body->levels[kLevel].mesh);
   std::vector<glm::vec3> va(sa.vertex_count), vb(sb.vertex_count);
   for (std::size_t i = 0; i < sa.vertex_count; ++i) va[current_layout(replay).original[i]] = sa.position(0, i);
   for (std::size_t i = 0; i < sb.vertex_count; ++i)
     vb[current_layout(*engine.scene).original[i]] = relative_to_start(engine, sb.position(0, i));
   double worst_vertex = 0.0;
-  for (std::size_t v = 0; v < va.size(); ++v) worst_vertex = std::max(worst_vertex, double(glm::length(va[v] - vb[v])));
+  for (std::size_t w = 0; w < va.size(); ++w)
+    worst_vertex = std::max(worst_vertex, double(glm::length(va[w] - vb[source[w]])));
   EXPECT_LT(worst_vertex, 1e-5) << "skinned vertex positions, m";
 }
 
@@ -401,7 +456,8 @@ TEST(StrataExport, WritesAGlbTheImporterReads) {
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_NE(r.out.find("8923 vertices"), std::string::npos) << r.out;
   const ImportedBody body = load_gltf(file);
-  EXPECT_EQ(body.mesh.vertex_count(), shipped_rig().body->levels[1].mesh.vertex_count());
+  EXPECT_GE(body.mesh.vertex_count(), shipped_rig().body->levels[1].mesh.vertex_count());  // plus UV seam splits
+  EXPECT_LT(body.mesh.vertex_count(), shipped_rig().body->levels[1].mesh.vertex_count() * 23 / 20);
   ASSERT_EQ(body.clips.size(), 1u);
   EXPECT_NEAR(body.clips[0].duration, 0.5f, 1e-5f);
 

@@ -93,8 +93,16 @@ TEST(Obj, ConsistentUvsAndNormalsAreKept) {
       "vn 0 0 3\n"
       "f 1/1/1 2/2/1 3/3/1\n"
       "f 2/2/1 4/4/1 3/5/1\n";
-  // Vertex 3 is given vt 3 (0.5 0.6) then vt 5 (0.1 0.2): a seam, so uvs are dropped.
-  EXPECT_TRUE(load_obj_text(text, "seam.obj").uvs.empty());
+  // Vertex 3 is given vt 3 (0.5 0.6) then vt 5 (0.1 0.2): a seam, so per-vertex uvs are dropped; the corners keep
+  // theirs.
+  const Mesh seam = load_obj_text(text, "seam.obj");
+  EXPECT_TRUE(seam.uvs.empty());
+  ASSERT_EQ(seam.corner_uvs.size(), 6u);
+  EXPECT_EQ(seam.corner_uvs[2], glm::vec2(0.5f, 0.6f));
+  EXPECT_EQ(seam.corner_uvs[5], glm::vec2(0.1f, 0.2f));
+  // A face without texture coordinates leaves the mesh without corner uvs rather than half of them.
+  EXPECT_TRUE(load_obj_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf 2 4 3\n", "half.obj")
+                  .corner_uvs.empty());
   const char* consistent =
       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
       "vt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\nvt 0.7 0.8\nvt 0.5 0.6\n"
@@ -166,6 +174,7 @@ TEST(Obj, MakeHumanBaseObj) {
   EXPECT_EQ(body.vertex_count(), 13380u);
   EXPECT_EQ(body.triangle_count(), 26756u);  // 13,378 quads
   EXPECT_TRUE(body.uvs.empty());             // 14,517 distinct uvs on 13,380 vertices: seams, dropped
+  EXPECT_EQ(body.corner_uvs.size(), 3u * body.triangle_count());  // kept per corner
   EXPECT_EQ(body.normals.size(), body.vertex_count());
   float lo = 1e9f, hi = -1e9f;
   for (const glm::vec3& p : body.positions) lo = std::min(lo, p.y), hi = std::max(hi, p.y);

@@ -3,9 +3,11 @@
 // derived levels: exact budgets, closed 2-manifolds, 53 parts, fitted to the skeleton (crown, feet on the sites,
 // hands clear of the thighs), following another skeleton's size, deterministic.
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <set>
@@ -89,6 +91,43 @@ TEST(MakeHumanPack, ShippedFileIsAFreshPackOfTheSharedFolder) {
   EXPECT_EQ(fresh.skin.joints, shipped.skin.joints);
   EXPECT_EQ(fresh.skin.weights, shipped.skin.weights);
   EXPECT_EQ(fresh.joint_centers, shipped.joint_centers);
+  EXPECT_EQ(fresh.corner_uvs, shipped.corner_uvs);
+}
+
+// The raw (inflated) stream of a packed file, and a file around a raw stream.
+std::string raw_of(const std::string& packed) {
+  std::uint32_t raw_size = 0;
+  std::memcpy(&raw_size, packed.data() + 8, 4);
+  std::string raw(raw_size, '\0');
+  uLongf got = raw_size;
+  EXPECT_EQ(uncompress(reinterpret_cast<Bytef*>(raw.data()), &got,
+                       reinterpret_cast<const Bytef*>(packed.data() + 16), static_cast<uLong>(packed.size() - 16)),
+            Z_OK);
+  return raw;
+}
+std::string repacked(const char* magic, const std::string& raw) {
+  uLongf size = compressBound(static_cast<uLong>(raw.size()));
+  std::string z(size, '\0');
+  EXPECT_EQ(compress2(reinterpret_cast<Bytef*>(z.data()), &size, reinterpret_cast<const Bytef*>(raw.data()),
+                      static_cast<uLong>(raw.size()), 9),
+            Z_OK);
+  z.resize(size);
+  std::string out(magic, 8);
+  const std::uint32_t sizes[2] = {static_cast<std::uint32_t>(raw.size()), static_cast<std::uint32_t>(size)};
+  out.append(reinterpret_cast<const char*>(sizes), sizeof sizes);
+  return out + z;
+}
+// Where a packed file's texture coordinate section starts in its raw stream (the format in io/makehuman_pack.h:
+// counts, box, joint centres, positions, triangles, parts, influence joints and weights before it), and its
+// count of extra (seam) texture coordinates.
+std::size_t uv_section_at(const MakeHumanSource& s) {
+  const std::size_t n = s.positions.size(), t = s.triangles.size() / 3, j = s.joint_centers.size();
+  return 12 + 24 + 12 * j + 6 * n + 6 * t + n + 4 * n + 4 * n;
+}
+std::uint32_t seam_extras(const std::string& packed) {
+  std::uint32_t extras = 0;
+  std::memcpy(&extras, raw_of(packed).data() + uv_section_at(source()), 4);
+  return extras;
 }
 
 TEST(MakeHumanPack, BadInputIsOneLineNamingTheSourceAndWhatIsWrong) {
@@ -105,7 +144,7 @@ TEST(MakeHumanPack, BadInputIsOneLineNamingTheSourceAndWhatIsWrong) {
     }
   };
   expect_error("", "truncated");
-  expect_error("STMHPK02" + good.substr(8), "bad magic");
+  expect_error("STMHPK09" + good.substr(8), "bad magic");
   expect_error(good.substr(0, good.size() - 10), "the header says");
   std::string corrupt = good;
   for (std::size_t i = 40; i < 80; ++i) corrupt[i] = static_cast<char>(corrupt[i] ^ 0x5a);
@@ -124,6 +163,49 @@ TEST(MakeHumanPack, BadInputIsOneLineNamingTheSourceAndWhatIsWrong) {
   bad = source();
   bad.skin.weights[9] = {0.0f, 0.0f, 0.0f, 0.0f};
   expect_error(pack_makehuman_source(bad), "vertex 9 has no weight");
+
+  // The texture coordinates' section, edited in the raw stream: a corner code beyond the extras, a bad box, and
+  // bytes left over.
+  const std::size_t extras_at = uv_section_at(source());
+  EXPECT_EQ(raw_of(good).size(), extras_at + 4 + 1 + 16 + 4 * (source().positions.size() + seam_extras(good)) +
+                                     2 * source().triangles.size());
+  std::string raw = raw_of(good);
+  raw[raw.size() - 2] = raw[raw.size() - 1] = static_cast<char>(0xff);  // the last corner's code: 65535
+  expect_error(repacked("STMHPK02", raw), "corner texture coordinate 65535 >");
+  raw = raw_of(good);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(raw.data() + extras_at + 5, &nan, sizeof nan);
+  expect_error(repacked("STMHPK02", raw), "bad texture coordinate box");
+  expect_error(repacked("STMHPK02", raw_of(good) + "x"), "trailing bytes after the texture coordinates");
+  // Bad content the writer refuses outright.
+  bad = source();
+  bad.corner_uvs.pop_back();
+  EXPECT_THROW((void)pack_makehuman_source(bad), std::invalid_argument);
+}
+
+// A version 1 file (no texture coordinates: the raw stream ends at the weights) still reads, without them.
+TEST(MakeHumanPack, VersionOneFilesReadWithoutTextureCoordinates) {
+  const std::string good = pack_makehuman_source(source());
+  std::string raw = raw_of(good);
+  raw.resize(uv_section_at(source()));
+  const MakeHumanSource v1 = unpack_makehuman_source(repacked("STMHPK01", raw), "v1.bin");
+  EXPECT_TRUE(v1.corner_uvs.empty());
+  EXPECT_EQ(v1.triangles, source().triangles);
+  EXPECT_EQ(v1.positions, unpack_makehuman_source(good, "v2.bin").positions);
+}
+
+TEST(MakeHumanPack, TextureCoordinatesRoundTripPerCorner) {
+  const MakeHumanSource& s = source();
+  ASSERT_EQ(s.corner_uvs.size(), s.triangles.size()) << "the shipped source carries MakeHuman's uvs";
+  const MakeHumanSource back = unpack_makehuman_source(pack_makehuman_source(s), "round trip");
+  ASSERT_EQ(back.corner_uvs.size(), s.corner_uvs.size());
+  std::set<std::pair<float, float>> distinct;
+  for (std::size_t c = 0; c < s.corner_uvs.size(); ++c) {
+    ASSERT_LT(glm::length(back.corner_uvs[c] - s.corner_uvs[c]), 2e-5f) << c;  // 16-bit steps of the unit square
+    distinct.insert({s.corner_uvs[c].x, s.corner_uvs[c].y});
+  }
+  // Seams: more distinct texture coordinates than vertices (MakeHuman's body has 14,517 on 13,380 vertices).
+  EXPECT_GT(distinct.size(), s.positions.size());
 }
 
 // ---- The derived body ----------------------------------------------------------------------------------------------
