@@ -19,6 +19,41 @@ namespace strata {
 namespace Far = OpenSubdiv::Far;
 namespace Sdc = OpenSubdiv::Sdc;
 
+namespace {
+
+// The cage's texture coordinates as one face-varying channel: values and an index per triangle corner. Per-vertex
+// UVs index like the triangles; per-corner ones (a seam gives a vertex two) as their distinct values, in first-use
+// order. Empty when the cage has neither.
+struct UvChannel {
+  std::vector<glm::vec2> values;
+  std::vector<Far::Index> indices;
+};
+UvChannel uv_channel_of(const Mesh& cage) {
+  UvChannel c;
+  if (cage.corner_uvs.size() == cage.triangles.size() && !cage.triangles.empty()) {
+    std::vector<std::vector<Far::Index>> of_vertex(cage.vertex_count());  // per vertex, its values so far
+    c.indices.reserve(cage.triangles.size());
+    for (std::size_t k = 0; k < cage.triangles.size(); ++k) {
+      const glm::vec2 uv = cage.corner_uvs[k];
+      std::vector<Far::Index>& mine = of_vertex[cage.triangles[k]];
+      const auto it = std::find_if(mine.begin(), mine.end(), [&](Far::Index i) { return c.values[static_cast<std::size_t>(i)] == uv; });
+      if (it != mine.end()) {
+        c.indices.push_back(*it);
+      } else {
+        c.indices.push_back(static_cast<Far::Index>(c.values.size()));
+        mine.push_back(c.indices.back());
+        c.values.push_back(uv);
+      }
+    }
+  } else if (cage.uvs.size() == cage.vertex_count() && cage.vertex_count() > 0) {
+    c.values = cage.uvs;
+    c.indices.assign(cage.triangles.begin(), cage.triangles.end());
+  }
+  return c;
+}
+
+}  // namespace
+
 std::unique_ptr<Far::TopologyRefiner> make_cage_refiner(const Mesh& cage) {
   if (cage.vertex_count() == 0 || cage.triangle_count() == 0)
     throw std::invalid_argument("subdivision cage '" + cage.name + "' is empty");
@@ -30,12 +65,13 @@ std::unique_ptr<Far::TopologyRefiner> make_cage_refiner(const Mesh& cage) {
   desc.numFaces = faces;
   desc.numVertsPerFace = verts_per_face.data();
   desc.vertIndicesPerFace = indices.data();
-  // Per-vertex UVs become one face-varying channel indexed like the triangles: the refined UVs may then split
-  // at seams (if a later cage carries them) without a change here.
+  // Texture coordinates become one face-varying channel (uv_channel_of), so the refined ones keep the cage's
+  // seams.
+  const UvChannel uvs = uv_channel_of(cage);
   Far::TopologyDescriptor::FVarChannel uv_channel;
-  if (cage.uvs.size() == cage.vertex_count()) {
-    uv_channel.numValues = static_cast<int>(cage.vertex_count());
-    uv_channel.valueIndices = indices.data();
+  if (!uvs.values.empty()) {
+    uv_channel.numValues = static_cast<int>(uvs.values.size());
+    uv_channel.valueIndices = uvs.indices.data();
     desc.numFVarChannels = 1;
     desc.fvarChannels = &uv_channel;
   }
@@ -207,8 +243,9 @@ SubdivSurface make_subdiv_surface(const BodyLevel& cage, int depth, StencilForm 
       void Clear() { value = glm::vec2(0.0f); }
       void AddWithWeight(const Uv& src, float w) { value += w * src.value; }
     };
-    std::vector<Uv> uv(cage.mesh.uvs.size());
-    for (std::size_t i = 0; i < uv.size(); ++i) uv[i].value = cage.mesh.uvs[i];
+    const UvChannel channel = uv_channel_of(cage.mesh);  // the values make_cage_refiner indexed
+    std::vector<Uv> uv(channel.values.size());
+    for (std::size_t i = 0; i < uv.size(); ++i) uv[i].value = channel.values[i];
     const Far::PrimvarRefiner primvar(*refiner);
     for (int level = 1; level <= depth; ++level) {
       std::vector<Uv> next(static_cast<std::size_t>(refiner->GetLevel(level).GetNumFVarValues(0)));

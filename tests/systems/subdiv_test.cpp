@@ -391,6 +391,33 @@ TEST(Subdiv, OpenBoundaryKeepsItsEdgeAndUvsAreRefinedOnce) {
   }
 }
 
+// The default body's cage carries MakeHuman's texture coordinates per corner (seams included); every subdivision
+// level refines them as one face-varying channel, keeping the seams: each refined corner has a UV in the unit
+// square, more distinct UVs than vertices, and (nearly) no triangle turned over in texture space.
+TEST(Subdiv, TheDefaultBodysSeamedUvsAreRefinedAtEveryLevel) {
+  const auto body = default_bound_body();
+  ASSERT_TRUE(body->cage);
+  ASSERT_EQ(body->cage->mesh.corner_uvs.size(), body->cage->mesh.triangles.size());
+  for (int depth = 1; depth <= kMaxSubdivDepth; ++depth) {
+    SCOPED_TRACE("S" + std::to_string(depth));
+    const SubdivSurface s = make_subdiv_surface(*body->cage, depth);
+    ASSERT_EQ(s.uv_triangles.size(), s.triangles.size());
+    EXPECT_GT(s.uvs.size(), s.vertex_count) << "the seams split UVs";
+    for (const std::uint32_t i : s.uv_triangles) {
+      ASSERT_LT(i, s.uvs.size());
+      const glm::vec2 uv = s.uvs[i];
+      ASSERT_TRUE(uv.x >= 0.0f && uv.x <= 1.0f && uv.y >= 0.0f && uv.y <= 1.0f);
+    }
+    std::size_t positive = 0;
+    for (std::size_t t = 0; t + 2 < s.uv_triangles.size(); t += 3) {
+      const glm::vec2 a = s.uvs[s.uv_triangles[t]], b = s.uvs[s.uv_triangles[t + 1]], c = s.uvs[s.uv_triangles[t + 2]];
+      positive += (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x) > 0.0f;
+    }
+    const std::size_t triangles = s.triangles.size() / 3;
+    EXPECT_GT(std::max(positive, triangles - positive), triangles * 98 / 100) << positive << " of " << triangles;
+  }
+}
+
 // validate() rejects each missing or mismatched input, and run() then writes nothing.
 TEST(SubdivJob, JobValidity) {
   const Rig rig = default_rig();
