@@ -79,7 +79,6 @@ Refined loop_refine(const std::vector<glm::vec3>& positions, const std::vector<s
   return out;
 }
 
-
 // How far, across the limb, the middle of a hinge's limb (a knee, an elbow) sits from `centres[joint]`: the
 // area-weighted centroid of the limb's cross-sections within kHingeSpan of the joint, each cut square to its bone
 // (the upper one above the joint, the lower one below). Only triangles bound to the parent, the joint or the
