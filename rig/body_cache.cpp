@@ -188,7 +188,7 @@ void save_body_cache(const std::filesystem::path& file, std::uint64_t key, const
 
 BodyLevels cached_body_levels(std::string_view stem, std::uint64_t key, const std::function<BodyLevels()>& make) {
   const auto directory = body_cache_directory();
-  char hex[20];
+  char hex[32];  // "_" + 16 hex digits + ".bin" + NUL = 22 (20 cut the names to ".b")
   std::snprintf(hex, sizeof hex, "_%016llx.bin", static_cast<unsigned long long>(key));
   const std::filesystem::path file = directory ? *directory / (std::string(stem) + hex) : std::filesystem::path();
   if (directory)
