@@ -30,6 +30,8 @@ BodyLevels sample_body() {
   BodyLevels b;
   for (int l = 0; l < 3; ++l) b.levels[l] = tetra("level", 1.0f + l);
   b.cage = tetra("cage", 0.5f);
+  for (std::size_t c = 0; c < b.levels[0].triangles.size(); ++c)  // face-varying texture coordinates on one level
+    b.levels[0].corner_uvs.emplace_back(0.1f * float(c), 1.0f - 0.05f * float(c));
   return b;
 }
 
@@ -46,7 +48,9 @@ TEST(BodyCache, RoundTripsExactly) {
     EXPECT_EQ(back->levels[l].triangles, body.levels[l].triangles);
     EXPECT_EQ(back->levels[l].part, body.levels[l].part);
     EXPECT_EQ(back->levels[l].part_names, body.levels[l].part_names);
+    EXPECT_EQ(back->levels[l].corner_uvs, body.levels[l].corner_uvs);
   }
+  EXPECT_EQ(back->levels[0].corner_uvs.size(), 12u);
   EXPECT_EQ(back->cage.positions, body.cage.positions);
 }
 
