@@ -95,8 +95,15 @@ class TriangleGrid {
 
   Hit nearest(const glm::dvec3& p) {
     Hit best;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return best;  // triangle 0's first corner
     ++stamp_;
     for (int reach = 1;; reach *= 2) {
+      // A point far from the surface would grow the cube past every occupied cell: scan the triangles instead.
+      const double side = 2.0 * reach + 1.0;
+      if (side * side * side > double(cells_.size())) {
+        for (std::uint32_t k = 0; k < seen_.size(); ++k) consider(p, k, best);
+        return best;
+      }
       const glm::ivec3 c = cell_of(p);
       for (int x = c.x - reach; x <= c.x + reach; ++x)
         for (int y = c.y - reach; y <= c.y + reach; ++y)
@@ -106,21 +113,24 @@ class TriangleGrid {
             for (const std::uint32_t k : it->second) {
               if (seen_[k] == stamp_) continue;
               seen_[k] = stamp_;
-              const glm::dvec3 a(s_.positions[s_.triangles[3 * k]]), b(s_.positions[s_.triangles[3 * k + 1]]),
-                  d(s_.positions[s_.triangles[3 * k + 2]]);
-              const glm::dvec3 w = closest_barycentric(p, a, b, d);
-              const double dist = glm::length(p - (w.x * a + w.y * b + w.z * d));
-              // Ties to the lower triangle index, so the answer does not depend on the cells' visiting order.
-              if (dist < best.distance || (dist == best.distance && k < best.triangle)) best = {k, w, dist};
+              consider(p, k, best);
             }
           }
       // Cells reached cover every point within (reach) cells of p's own cell.
-      if (best.distance <= reach * cell_ || reach * cell_ > 2.0 * extent_ + cell_) return best;
+      if (best.distance <= reach * cell_) return best;
       ++stamp_;  // the next, larger cube revisits the inner cells: cheap, and the ties rule keeps the result
     }
   }
 
  private:
+  void consider(const glm::dvec3& p, std::uint32_t k, Hit& best) const {
+    const glm::dvec3 a(s_.positions[s_.triangles[3 * k]]), b(s_.positions[s_.triangles[3 * k + 1]]),
+        d(s_.positions[s_.triangles[3 * k + 2]]);
+    const glm::dvec3 w = closest_barycentric(p, a, b, d);
+    const double dist = glm::length(p - (w.x * a + w.y * b + w.z * d));
+    // Ties to the lower triangle index, so the answer does not depend on the cells' visiting order.
+    if (dist < best.distance || (dist == best.distance && k < best.triangle)) best = {k, w, dist};
+  }
   glm::ivec3 cell_of(const glm::dvec3& p) const {
     const glm::dvec3 q = glm::floor((p - lo_) / cell_);
     return glm::ivec3(glm::clamp(q, glm::dvec3(-1e6), glm::dvec3(1e6)));

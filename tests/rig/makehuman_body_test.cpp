@@ -349,7 +349,9 @@ TEST(MakeHumanBody, DerivationIsDeterministicAndTheCacheGivesItBack) {
     EXPECT_EQ(again.levels[static_cast<std::size_t>(l)].positions, body().levels[static_cast<std::size_t>(l)].positions);
     EXPECT_EQ(again.levels[static_cast<std::size_t>(l)].triangles, body().levels[static_cast<std::size_t>(l)].triangles);
     EXPECT_EQ(again.levels[static_cast<std::size_t>(l)].part, body().levels[static_cast<std::size_t>(l)].part);
+    EXPECT_EQ(again.levels[static_cast<std::size_t>(l)].corner_uvs, body().levels[static_cast<std::size_t>(l)].corner_uvs);
   }
+  EXPECT_EQ(again.cage.corner_uvs, body().cage.corner_uvs);
   EXPECT_EQ(again.cage.positions, body().cage.positions);
 }
 

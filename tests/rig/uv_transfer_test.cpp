@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <vector>
@@ -70,6 +71,26 @@ TEST(UvTransfer, ACornerAcrossASeamIsClampedToItsTrianglesSide) {
     for (int k = 0; k < 3; ++k) lo = std::min(lo, out[3 * t + k].x), hi = std::max(hi, out[3 * t + k].x);
     EXPECT_LT(hi - lo, 0.2f) << "triangle " << t << " spans the gap between the islands (u " << lo << " .. " << hi << ")";
   }
+}
+
+// A target off the source's surface, even far off, gets the UVs of the source's nearest points (the grid search
+// falls back to scanning every triangle rather than growing its cube without end), and a NaN position no NaN.
+TEST(UvTransfer, FarAndNonFiniteTargetsStillGetTheNearestUvs) {
+  const Mesh source = grid(4, false);
+  std::vector<glm::vec2> uvs;
+  for (const std::uint32_t v : source.triangles) uvs.emplace_back(source.positions[v].x, source.positions[v].y);
+  Mesh target = grid(2, true);
+  for (glm::vec3& p : target.positions) p += glm::vec3(0.0f, 0.0f, 500.0f);  // 500 m above the plane
+  target.positions[0] = glm::vec3(-300.0f, 0.25f, 0.0f);                     // beyond the source's left edge
+  const std::vector<glm::vec2> out = transfer_corner_uvs({source.positions, source.triangles, uvs}, target);
+  for (std::size_t c = 0; c < out.size(); ++c) {
+    const glm::vec3 p = target.positions[target.triangles[c]];
+    EXPECT_NEAR(out[c].x, std::clamp(p.x, 0.0f, 1.0f), 1e-5f) << c;
+    EXPECT_NEAR(out[c].y, std::clamp(p.y, 0.0f, 1.0f), 1e-5f) << c;
+  }
+  target.positions[4].x = std::numeric_limits<float>::quiet_NaN();
+  for (const glm::vec2& uv : transfer_corner_uvs({source.positions, source.triangles, uvs}, target))
+    EXPECT_TRUE(std::isfinite(uv.x) && std::isfinite(uv.y));
 }
 
 TEST(UvTransfer, BadSourceIsAnError) {
