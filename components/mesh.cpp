@@ -23,6 +23,28 @@ const std::vector<std::string>& paper_part_names() {
   return names;
 }
 
+CornerUvValues corner_uv_values(const Mesh& mesh) {
+  CornerUvValues out;
+  if (mesh.corner_uvs.size() != mesh.triangles.size() || mesh.triangles.empty()) return out;
+  std::vector<std::vector<std::uint32_t>> of_vertex(mesh.vertex_count());  // per vertex, its values so far
+  out.of_corner.reserve(mesh.triangles.size());
+  for (std::size_t c = 0; c < mesh.triangles.size(); ++c) {
+    const std::uint32_t v = mesh.triangles[c];
+    const glm::vec2 uv = mesh.corner_uvs[c];
+    std::vector<std::uint32_t>& mine = of_vertex.at(v);
+    const auto it = std::find_if(mine.begin(), mine.end(), [&](std::uint32_t i) { return out.uvs[i] == uv; });
+    if (it != mine.end()) {
+      out.of_corner.push_back(*it);
+      continue;
+    }
+    out.of_corner.push_back(static_cast<std::uint32_t>(out.uvs.size()));
+    mine.push_back(out.of_corner.back());
+    out.uvs.push_back(uv);
+    out.vertex.push_back(v);
+  }
+  return out;
+}
+
 void compute_normals(Mesh& mesh) {
   mesh.normals.assign(mesh.positions.size(), glm::vec3(0.0f));
   for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {

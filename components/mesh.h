@@ -50,6 +50,17 @@ struct SkinBinding {
   }
 };
 
+// A mesh's per-corner texture coordinates (corner_uvs) as per-vertex values: one per distinct (vertex, uv) pair,
+// in the order corners first use them, with each value's vertex and each corner's value. This is where a UV seam
+// splits a vertex, for consumers whose attributes are per vertex (glTF) or per face-varying value (OpenSubdiv).
+// Empty when the mesh has no corner uvs.
+struct CornerUvValues {
+  std::vector<glm::vec2> uvs;             // per value
+  std::vector<std::uint32_t> vertex;      // per value: the mesh vertex it belongs to
+  std::vector<std::uint32_t> of_corner;   // per corner (3 per triangle): its value
+};
+CornerUvValues corner_uv_values(const Mesh& mesh);
+
 // Area-weighted vertex normals from the triangles (degenerate triangles contribute nothing; a vertex with no
 // usable triangle gets +Y so no NaN leaves).
 void compute_normals(Mesh& mesh);

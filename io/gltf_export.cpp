@@ -214,25 +214,13 @@ GltfExportStats write_gltf_binary(const std::filesystem::path& path, const Skele
   std::vector<glm::vec2> written_uv;
   std::vector<std::uint32_t> indices(mesh.triangles.begin(), mesh.triangles.end());
   if (corner_uvs) {
-    written_of.clear();
-    std::vector<std::vector<std::uint32_t>> splits(vertices);  // per source vertex, its written vertices
-    for (std::size_t c = 0; c < indices.size(); ++c) {
-      const std::uint32_t v = mesh.triangles[c];
-      const glm::vec2 uv = mesh.corner_uvs[c];
-      if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+    for (std::size_t c = 0; c < mesh.corner_uvs.size(); ++c)
+      if (!std::isfinite(mesh.corner_uvs[c].x) || !std::isfinite(mesh.corner_uvs[c].y))
         out.fail("triangle " + std::to_string(c / 3) + ": texture coordinate is not finite");
-      std::uint32_t w = 0;
-      bool found = false;
-      for (const std::uint32_t s : splits[v])
-        if (written_uv[s] == uv) w = s, found = true;
-      if (!found) {
-        w = static_cast<std::uint32_t>(written_of.size());
-        written_of.push_back(v);
-        written_uv.push_back(uv);
-        splits[v].push_back(w);
-      }
-      indices[c] = w;
-    }
+    CornerUvValues split = corner_uv_values(mesh);
+    written_of = std::move(split.vertex);
+    written_uv = std::move(split.uvs);
+    indices = std::move(split.of_corner);
   } else {
     for (std::size_t v = 0; v < vertices; ++v) written_of[v] = static_cast<std::uint32_t>(v);
     if (vertex_uvs) written_uv = mesh.uvs;

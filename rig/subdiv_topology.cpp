@@ -22,8 +22,8 @@ namespace Sdc = OpenSubdiv::Sdc;
 namespace {
 
 // The cage's texture coordinates as one face-varying channel: values and an index per triangle corner. Per-vertex
-// UVs index like the triangles; per-corner ones (a seam gives a vertex two) as their distinct values, in first-use
-// order. Empty when the cage has neither.
+// UVs index like the triangles; per-corner ones as their distinct values per vertex (corner_uv_values: a seam
+// gives a vertex two). Empty when the cage has neither.
 struct UvChannel {
   std::vector<glm::vec2> values;
   std::vector<Far::Index> indices;
@@ -31,20 +31,9 @@ struct UvChannel {
 UvChannel uv_channel_of(const Mesh& cage) {
   UvChannel c;
   if (cage.corner_uvs.size() == cage.triangles.size() && !cage.triangles.empty()) {
-    std::vector<std::vector<Far::Index>> of_vertex(cage.vertex_count());  // per vertex, its values so far
-    c.indices.reserve(cage.triangles.size());
-    for (std::size_t k = 0; k < cage.triangles.size(); ++k) {
-      const glm::vec2 uv = cage.corner_uvs[k];
-      std::vector<Far::Index>& mine = of_vertex[cage.triangles[k]];
-      const auto it = std::find_if(mine.begin(), mine.end(), [&](Far::Index i) { return c.values[static_cast<std::size_t>(i)] == uv; });
-      if (it != mine.end()) {
-        c.indices.push_back(*it);
-      } else {
-        c.indices.push_back(static_cast<Far::Index>(c.values.size()));
-        mine.push_back(c.indices.back());
-        c.values.push_back(uv);
-      }
-    }
+    CornerUvValues split = corner_uv_values(cage);
+    c.values = std::move(split.uvs);
+    c.indices.assign(split.of_corner.begin(), split.of_corner.end());
   } else if (cage.uvs.size() == cage.vertex_count() && cage.vertex_count() > 0) {
     c.values = cage.uvs;
     c.indices.assign(cage.triangles.begin(), cage.triangles.end());

@@ -100,6 +100,15 @@ TEST(Obj, ConsistentUvsAndNormalsAreKept) {
   ASSERT_EQ(seam.corner_uvs.size(), 6u);
   EXPECT_EQ(seam.corner_uvs[2], glm::vec2(0.5f, 0.6f));
   EXPECT_EQ(seam.corner_uvs[5], glm::vec2(0.1f, 0.2f));
+  // Split where the seam is: vertex 3 (index 2) carries two values, every other vertex one, in first-use order.
+  const CornerUvValues split = corner_uv_values(seam);
+  EXPECT_EQ(split.uvs.size(), 5u);
+  EXPECT_EQ(split.vertex, (std::vector<std::uint32_t>{0, 1, 2, 3, 2}));
+  EXPECT_EQ(split.of_corner, (std::vector<std::uint32_t>{0, 1, 2, 1, 3, 4}));
+  for (std::size_t c = 0; c < 6; ++c) {
+    EXPECT_EQ(split.uvs[split.of_corner[c]], seam.corner_uvs[c]) << c;
+    EXPECT_EQ(split.vertex[split.of_corner[c]], seam.triangles[c]) << c;
+  }
   // A face without texture coordinates leaves the mesh without corner uvs rather than half of them.
   EXPECT_TRUE(load_obj_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf 2 4 3\n", "half.obj")
                   .corner_uvs.empty());
