@@ -23,6 +23,48 @@ const std::vector<std::string>& paper_part_names() {
   return names;
 }
 
+namespace {
+
+template <class Position>
+PlaneSection plane_section_of(std::span<const Position> p, std::span<const std::uint32_t> triangles,
+                              std::span<const std::size_t> starts, const glm::dvec3& o, const glm::dvec3& axis) {
+  PlaneSection out;
+  glm::dvec3 moment(0.0);
+  for (const std::size_t t : starts) {
+    const glm::dvec3 v[3] = {glm::dvec3(p[triangles[t]]), glm::dvec3(p[triangles[t + 1]]), glm::dvec3(p[triangles[t + 2]])};
+    double d[3];
+    for (int k = 0; k < 3; ++k) d[k] = glm::dot(v[k] - o, axis);
+    glm::dvec3 q[2];
+    int found = 0;
+    for (int k = 0; k < 3 && found < 2; ++k) {
+      const int l = (k + 1) % 3;
+      if ((d[k] < 0.0) == (d[l] < 0.0)) continue;  // this edge does not cross
+      q[found++] = v[k] + (d[k] / (d[k] - d[l])) * (v[l] - v[k]);
+    }
+    if (found < 2) continue;
+    // Counter-clockwise seen from +axis: the cut's outward normal, cross(segment, axis), agrees with the triangle's.
+    const glm::dvec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
+    if (glm::dot(glm::cross(q[1] - q[0], axis), n) < 0.0) std::swap(q[0], q[1]);
+    // The segment and o make a (signed) triangle of the section; its centroid is (q0 + q1 - 2 o) / 3 from o.
+    const double a = 0.5 * glm::dot(axis, glm::cross(q[0] - o, q[1] - o));
+    out.area += a;
+    moment += a * ((q[0] - o) + (q[1] - o)) / 3.0;
+  }
+  if (out.area > 0.0) out.centroid_offset = moment / out.area;
+  return out;
+}
+
+}  // namespace
+
+PlaneSection plane_section(std::span<const glm::vec3> positions, std::span<const std::uint32_t> triangles,
+                           std::span<const std::size_t> starts, const glm::dvec3& o, const glm::dvec3& axis) {
+  return plane_section_of(positions, triangles, starts, o, axis);
+}
+PlaneSection plane_section(std::span<const glm::dvec3> positions, std::span<const std::uint32_t> triangles,
+                           std::span<const std::size_t> starts, const glm::dvec3& o, const glm::dvec3& axis) {
+  return plane_section_of(positions, triangles, starts, o, axis);
+}
+
 CornerUvValues corner_uv_values(const Mesh& mesh) {
   CornerUvValues out;
   if (mesh.corner_uvs.size() != mesh.triangles.size() || mesh.triangles.empty()) return out;

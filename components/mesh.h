@@ -61,6 +61,20 @@ struct CornerUvValues {
 };
 CornerUvValues corner_uv_values(const Mesh& mesh);
 
+// The closed cut of some triangles by the plane through `o` across `axis`: its signed area (counter-clockwise seen
+// from +axis, each cut segment oriented by its triangle's winding, so a concave outline sums right; a vertex on
+// the plane counts as in front) and its area centroid, as an offset from o (meaningful when the area is positive).
+// `starts` are triangle starts (indices into `triangles`, multiples of 3). For the section measures of skinning
+// (reference/skin_metrics.h) and the MakeHuman fit's limb middles (rig/makehuman_body.cpp).
+struct PlaneSection {
+  double area = 0.0;
+  glm::dvec3 centroid_offset{0.0};
+};
+PlaneSection plane_section(std::span<const glm::vec3> positions, std::span<const std::uint32_t> triangles,
+                           std::span<const std::size_t> starts, const glm::dvec3& o, const glm::dvec3& axis);
+PlaneSection plane_section(std::span<const glm::dvec3> positions, std::span<const std::uint32_t> triangles,
+                           std::span<const std::size_t> starts, const glm::dvec3& o, const glm::dvec3& axis);
+
 // Area-weighted vertex normals from the triangles (degenerate triangles contribute nothing; a vertex with no
 // usable triangle gets +Y so no NaN leaves).
 void compute_normals(Mesh& mesh);

@@ -187,32 +187,6 @@ bool bound_only_to(const SkinBinding& binding, std::size_t v, int a, int b) {
   return true;
 }
 
-// Signed area of the closed cut of `tris` (vertex positions `p`) by the plane through `o` across `axis`.
-double section_area(const Mesh& mesh, std::span<const glm::vec3> p, const std::vector<std::size_t>& tris,
-                    const glm::dvec3& o, const glm::dvec3& axis) {
-  double area = 0.0;
-  for (const std::size_t t : tris) {
-    const glm::dvec3 v[3] = {glm::dvec3(p[mesh.triangles[t]]), glm::dvec3(p[mesh.triangles[t + 1]]),
-                             glm::dvec3(p[mesh.triangles[t + 2]])};
-    double d[3];
-    for (int k = 0; k < 3; ++k) d[k] = glm::dot(v[k] - o, axis);
-    glm::dvec3 q[2];
-    int found = 0;
-    for (int k = 0; k < 3 && found < 2; ++k) {
-      const int l = (k + 1) % 3;
-      if ((d[k] < 0.0) == (d[l] < 0.0)) continue;  // this edge does not cross (a vertex on the plane counts as +)
-      q[found++] = v[k] + (d[k] / (d[k] - d[l])) * (v[l] - v[k]);
-    }
-    if (found < 2) continue;
-    // Counter-clockwise seen from +axis: the outward normal of the cut, cross(segment, axis), agrees with the
-    // triangle's.
-    const glm::dvec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
-    if (glm::dot(glm::cross(q[1] - q[0], axis), n) < 0.0) std::swap(q[0], q[1]);
-    area += 0.5 * glm::dot(axis, glm::cross(q[0] - o, q[1] - o));
-  }
-  return area;
-}
-
 }  // namespace
 
 double flexion_bulge_m(const Mesh& rest, const SkinBinding& binding, const Skeleton& skeleton, int joint, int child,
@@ -271,8 +245,8 @@ TwistSection twist_section(const Mesh& rest, const SkinBinding& binding, const S
   rotations[static_cast<std::size_t>(joint)] = glm::angleAxis(angle_rad, glm::vec3(axis));
   const ReferencePose pose = fk_reference(skeleton, rotations, glm::vec3(0.0f));
   const SkinnedVertices posed = skin_reference(rest, binding, pose.skinning, mode, centres);
-  out.rest_area_m2 = section_area(rest, rest.positions, tris, centre, axis);
-  out.posed_area_m2 = section_area(rest, posed.positions, tris, centre, axis);
+  out.rest_area_m2 = plane_section(rest.positions, rest.triangles, tris, centre, axis).area;
+  out.posed_area_m2 = plane_section(posed.positions, rest.triangles, tris, centre, axis).area;
   out.area_ratio = out.rest_area_m2 > 0.0 ? out.posed_area_m2 / out.rest_area_m2 : 1.0;
   return out;
 }

@@ -96,40 +96,19 @@ glm::dvec3 hinge_mid_line_offset(const std::vector<glm::dvec3>& positions, const
       const auto j = static_cast<std::size_t>(skin.joints[v][k]);
       if (skin.weights[v][k] > 0.0f && j != parent && j != joint && j != child) on_limb[v] = 0;
     }
+  std::vector<std::size_t> limb;  // triangle starts
+  for (std::size_t t = 0; t + 2 < triangles.size(); t += 3)
+    if (on_limb[triangles[t]] && on_limb[triangles[t + 1]] && on_limb[triangles[t + 2]]) limb.push_back(t);
   glm::dvec3 sum(0.0);
   double total_area = 0.0;
   constexpr int kCuts = 3;  // per side, and one through the joint
   for (int cut = -kCuts; cut <= kCuts; ++cut) {
     const double along = kHingeSpan * cut / kCuts;
     const glm::dvec3 axis = glm::normalize(cut < 0 ? up : down);
-    const glm::dvec3 o = centres[joint] + along * axis;
-    double area = 0.0;
-    glm::dvec3 moment(0.0);
-    for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
-      const std::uint32_t i[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
-      if (!on_limb[i[0]] || !on_limb[i[1]] || !on_limb[i[2]]) continue;
-      double d[3];
-      for (int k = 0; k < 3; ++k) d[k] = glm::dot(positions[i[k]] - o, axis);
-      glm::dvec3 q[2];
-      int found = 0;
-      for (int k = 0; k < 3 && found < 2; ++k) {
-        const int l = (k + 1) % 3;
-        if ((d[k] < 0.0) == (d[l] < 0.0)) continue;
-        q[found++] = positions[i[k]] + (d[k] / (d[k] - d[l])) * (positions[i[l]] - positions[i[k]]);
-      }
-      if (found < 2) continue;
-      // The cut's segment, oriented counter-clockwise seen from +axis, with o makes a triangle of the section
-      // (signed, so a concave outline sums right); its centroid is (q0 + q1 - 2 o) / 3 from o.
-      const glm::dvec3 n = glm::cross(positions[i[1]] - positions[i[0]], positions[i[2]] - positions[i[0]]);
-      if (glm::dot(glm::cross(q[1] - q[0], axis), n) < 0.0) std::swap(q[0], q[1]);
-      const double a = 0.5 * glm::dot(axis, glm::cross(q[0] - o, q[1] - o));
-      area += a;
-      moment += a * ((q[0] - o) + (q[1] - o)) / 3.0;
-    }
-    if (!(area > 0.0)) continue;  // the cut missed the limb (a body without this limb's triangles)
-    const glm::dvec3 offset = moment / area;
-    sum += area * (offset - glm::dot(offset, axis) * axis);
-    total_area += area;
+    const PlaneSection s = plane_section(positions, triangles, limb, centres[joint] + along * axis, axis);
+    if (!(s.area > 0.0)) continue;  // the cut missed the limb (a body without this limb's triangles)
+    sum += s.area * (s.centroid_offset - glm::dot(s.centroid_offset, axis) * axis);
+    total_area += s.area;
   }
   return total_area > 0.0 ? sum / total_area : glm::dvec3(0.0);
 }
