@@ -55,6 +55,7 @@ enum LegComponent : std::uint32_t {
   kLegToDistance,                            // path distance of the swing target
   kLegPlantDistance,                         // path distance of the planted footprint
   kLegEarlyLift,                             // agents: the leg phase an early swing left at (< 0: at toe-off)
+  kLegStancePitch,                           // stance: the foot's heel-up pitch (rad) in the last frame
   kLegFloats
 };
 inline constexpr std::uint32_t kGaitFloats = kGaitLegs + 2 * kLegFloats;

@@ -9,8 +9,9 @@
 namespace strata {
 namespace {
 
-// The wire form of a ghost: the entity index and eight floats, no padding.
-constexpr std::size_t kGhostBytes = 4 + 8 * 4;
+// The wire form of a ghost: the entity index and eleven floats, no padding.
+constexpr std::size_t kGhostFloats = 11;
+constexpr std::size_t kGhostBytes = 4 + kGhostFloats * 4;
 // Of a border observation: the entity index and three floats.
 constexpr std::size_t kObservationBytes = 4 + 3 * 4;
 // Of a plan offer: urgency and entity index.
@@ -50,7 +51,8 @@ std::vector<std::vector<std::uint8_t>> pack_ghosts(std::span<const AgentSnapshot
       mine, partition, rank, reach, [](const AgentSnapshot& s) { return s.px; },
       [](const AgentSnapshot& s) { return s.pz; },
       [](std::vector<std::uint8_t>& out, const AgentSnapshot& s) {
-        const float values[8] = {s.px, s.pz, s.vx, s.vz, s.pref_vx, s.pref_vz, s.radius, s.max_speed};
+        const float values[kGhostFloats] = {s.px,     s.pz,        s.vx,        s.vz,         s.pref_vx, s.pref_vz,
+                                            s.radius, s.max_speed, s.tether_dx, s.tether_dz, s.tether_reach};
         put(out, &s.walker, 4);
         put(out, values, sizeof values);
       });
@@ -65,7 +67,7 @@ void unpack_ghosts(std::span<const std::uint8_t> bytes, std::vector<AgentSnapsho
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint8_t* p = bytes.data() + k * kGhostBytes;
     AgentSnapshot& s = out[start + k];
-    float v[8];
+    float v[kGhostFloats];
     std::memcpy(&s.walker, p, 4);
     std::memcpy(v, p + 4, sizeof v);
     const bool finite = std::all_of(std::begin(v), std::end(v), [](float x) { return std::isfinite(x); });
@@ -76,6 +78,7 @@ void unpack_ghosts(std::span<const std::uint8_t> bytes, std::vector<AgentSnapsho
     }
     s.px = v[0], s.pz = v[1], s.vx = v[2], s.vz = v[3], s.pref_vx = v[4], s.pref_vz = v[5];
     s.radius = v[6], s.max_speed = v[7];
+    s.tether_dx = v[8], s.tether_dz = v[9], s.tether_reach = v[10];
   }
 }
 

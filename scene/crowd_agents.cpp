@@ -13,6 +13,7 @@
 #include "scene/spawn.h"
 #include "systems/animation_sample.h"
 #include "systems/job.h"
+#include "systems/locomotion.h"
 
 namespace strata {
 namespace {
@@ -129,6 +130,8 @@ void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& s
   agents->move.turn_in_place_rate = m.style.turn_in_place_rate;
   agents->move.acceleration = m.style.agent_acceleration;
   agents->move.braking = m.style.agent_braking;
+  agents->move.face_velocity_speed = m.style.face_velocity_speed;
+  agents->move.face_side_angle = m.style.face_side_angle;
   m.source = MotionSource::Walk;
   const CrowdAgents& a = *agents;
   crowd.agents = std::move(agents);
@@ -216,8 +219,11 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
     const SoaTable& t = crowd.world.table(crowd.tables[a.rows[k].table]);
     const std::size_t r = a.rows[k].row;
     auto f = [&](std::uint32_t c) { return t.f32(kWalkerAgent, c)[r]; };
+    const float scale = t.f32(kWalkerPlacement, 4)[r];
     a.mine[k] = {a.rows[k].walker, f(kAgentPx), f(kAgentPz), f(kAgentVx), f(kAgentVz), f(kAgentPrefVx),
-                 f(kAgentPrefVz), f(kAgentRadius) + a.radius_margin, 1.25f * f(kAgentPrefSpeed)};
+                 f(kAgentPrefVz), f(kAgentRadius) + a.radius_margin, 1.25f * f(kAgentPrefSpeed),
+                 t.f32(kWalkerGait, kGaitLagX)[r], t.f32(kWalkerGait, kGaitLagZ)[r],
+                 a.tether_share * kBodyLagMax * scale};
   }
   // Spread over processes: the other processes' agents near this one's join in entity order (merged with this
   // process's, which win a tie: a walker nobody owns is kept by every process), so each of this process's agents
@@ -234,7 +240,8 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
   }
   a.last_ghosts = a.ghosts.size();
   const std::size_t n = a.mine.size() + a.ghosts.size();
-  for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz})
+  for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz,
+                  &a.tether_dx, &a.tether_dz, &a.tether_reach})
     v->resize(n);
   a.order.resize(n);
   {
@@ -242,6 +249,7 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
     const auto put = [&](const AgentSnapshot& s, std::uint32_t source) {
       a.px[k] = s.px, a.pz[k] = s.pz, a.vx[k] = s.vx, a.vz[k] = s.vz;
       a.pref_vx[k] = s.pref_vx, a.pref_vz[k] = s.pref_vz, a.radius[k] = s.radius, a.max_speed[k] = s.max_speed;
+      a.tether_dx[k] = s.tether_dx, a.tether_dz[k] = s.tether_dz, a.tether_reach[k] = s.tether_reach;
       a.order[k++] = source;
     };
     while (i < a.mine.size() || j < a.ghosts.size()) {
@@ -253,7 +261,8 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
         put(a.ghosts[j++], kGhostRow);
       }
     }
-    for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz})
+    for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz,
+                  &a.tether_dx, &a.tether_dz, &a.tether_reach})
       v->resize(k);
     a.order.resize(k);
   }
@@ -269,6 +278,9 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
   job.max_speed = a.max_speed;
   job.new_vx = a.new_vx;
   job.new_vz = a.new_vz;
+  job.tether_dx = a.tether_dx;
+  job.tether_dz = a.tether_dz;
+  job.tether_reach = a.tether_reach;
   job.obstacles = a.obstacles && !a.obstacles->empty() ? a.obstacles.get() : nullptr;
   job.params = a.avoidance;
   job.params.dt = dt > 0.0f ? dt : a.avoidance.dt;

@@ -37,6 +37,9 @@ struct AgentSnapshot {
   float px = 0, pz = 0, vx = 0, vz = 0, pref_vx = 0, pref_vz = 0;
   float radius = 0;     // the disc avoidance keeps clear: the agent's radius plus CrowdAgents::radius_margin
   float max_speed = 0;  // the fastest avoidance may send it
+  // Its tether (AvoidanceJob::tether_dx): the walking body's offset from the agent, and how far off it the agent
+  // may go (<= 0: none).
+  float tether_dx = 0, tether_dz = 0, tether_reach = 0;
 };
 // A plan request competing for the step's planning budget: the most urgent first, ties by entity index.
 struct PlanCandidate {
@@ -74,12 +77,18 @@ struct CrowdAgents {
   // walker leaves its idle stance (agent_move.h holds it still), and the margin absorbs that. 6 cm packed dense
   // crowds so tight that far more of them stalled (crossing: 31 % through in 90 s against 55 % with 2 cm).
   float radius_margin = 0.02f;
+  // Avoidance keeps each agent within this share of kBodyLagMax (systems/locomotion.h, at the walker's scale) of
+  // its body, which planted feet may hold back: an agent running on ahead, as a jam's sidesteps carried them,
+  // left the body stretching for it and its feet dragging (issue 16). Below 1 so the body's own bound is seldom
+  // met (the tether is kept to first order within a step; see avoidance.cpp tether_plane).
+  float tether_share = 0.75f;
   std::uint32_t plans_per_step = 24;  // most paths planned in one step (those without a path first)
   double navigation_build_ms = 0;     // building (or loading) the navigation mesh
 
   // Scratch of the avoidance gather, by entity order; grown, never shrunk.
   AvoidanceScratch scratch;
-  std::vector<float> px, pz, vx, vz, pref_vx, pref_vz, radius, max_speed, new_vx, new_vz;
+  std::vector<float> px, pz, vx, vz, pref_vx, pref_vz, radius, max_speed, new_vx, new_vz, tether_dx, tether_dz,
+      tether_reach;
   struct Row {
     std::uint32_t walker;  // entity index: the gather's order
     std::uint32_t table, row;

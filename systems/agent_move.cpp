@@ -20,18 +20,12 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
   // Leaving (or settling into) the idle stance: the feet are down side by side and the body waits for them.
   if (job.gait.at(kGaitIdle, i) > 0.0f) vx = vz = 0.0f;
   const float speed = std::hypot(vx, vz);
-  // The body faces where it wants to go (its preferred velocity), or, wanting nothing, where it goes. Pushed aside
-  // or back by avoidance it steps that way without turning round: facing its velocity made pushed agents turn
-  // their backs on their goal and take seconds to turn back (half a test room never reached its door).
-  float face_x = a.at(kAgentPrefVx, i), face_z = a.at(kAgentPrefVz, i);
-  if (std::hypot(face_x, face_z) < 0.05f) {
-    face_x = vx;
-    face_z = vz;
-  }
+  const glm::vec2 face = facing_direction({vx, vz}, {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)},
+                                          p.face_velocity_speed, p.face_side_angle);
   float heading = a.at(kAgentHeading, i);
-  if (std::hypot(face_x, face_z) > 0.05f) {
+  if (face.x != 0.0f || face.y != 0.0f) {
     const float most = turn_rate_at(speed, p.turn_rate, p.turn_in_place_rate) * dt;
-    heading = wrap_angle(heading + std::clamp(wrap_angle(std::atan2(face_x, face_z) - heading), -most, most));
+    heading = wrap_angle(heading + std::clamp(wrap_angle(std::atan2(face.x, face.y) - heading), -most, most));
   }
   a.at(kAgentVx, i) = vx;
   a.at(kAgentVz, i) = vz;
@@ -54,6 +48,16 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
 }
 
 }  // namespace
+
+glm::vec2 facing_direction(glm::vec2 velocity, glm::vec2 preferred, float walking_speed, float side_angle) {
+  constexpr float kDirectionless = 0.05f;  // m/s
+  const float pref = std::hypot(preferred.x, preferred.y), speed = std::hypot(velocity.x, velocity.y);
+  if (pref < kDirectionless) return speed < kDirectionless ? glm::vec2(0.0f) : velocity;
+  if (speed >= walking_speed &&
+      velocity.x * preferred.x + velocity.y * preferred.y >= std::cos(side_angle) * speed * pref)
+    return velocity;
+  return preferred;
+}
 
 float agent_path_distance(const ColumnView<const float>& agent, const ColumnView<const float>& corners, std::size_t i) {
   const float px = agent.at(kAgentPx, i), pz = agent.at(kAgentPz, i);

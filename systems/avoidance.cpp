@@ -239,7 +239,7 @@ struct Agents {
   vec2 velocity(std::uint32_t i) const { return {job.vx[i], job.vz[i]}; }
 };
 
-constexpr std::size_t kMaxPlanes = kAvoidanceMaxNeighbors + kAvoidanceMaxObstacleEdges;
+constexpr std::size_t kMaxPlanes = kAvoidanceMaxNeighbors + kAvoidanceMaxObstacleEdges + 1;  // + the tether
 
 // A deterministic unit direction from a hash of a number (splitmix64's finaliser).
 vec2 hashed_direction(std::uint64_t key) {
@@ -414,6 +414,29 @@ std::size_t obstacle_planes(const AvoidanceJob& job, std::uint32_t i, const ForE
   return facing_count;
 }
 
+// {v : dot(v, u) <= limit} for a unit u.
+HalfPlane at_most_along(vec2 u, float limit) { return HalfPlane{u * limit, -u, 1.0f}; }
+
+// Agent i's tether (AvoidanceJob::tether_dx): with e the agent's offset from its tether point and r = |e|,
+// |e + v dt| <= reach is kept by dot(v, e / r) <= (reach - r) / dt, the disc's tangent at the point of e's
+// direction (a step across it lengthens e by (v dt)^2 / 2r at most: 0.3 cm at 1.4 m/s, 30 fps, r 0.2 m, which the
+// tether's user leaves room for). False when there is none or it cannot bind this step.
+// Rejected beside it: caps on the speed across and against the preferred velocity (where the body faced), so a
+// body goes no faster sideways or backwards than it steps: at 0.4-0.6 m/s the crossing's and the plaza's slides
+// over 2 cm came 2-3 times as often as with agents facing where they go (systems/agent_move.h facing_direction).
+bool tether_plane(const AvoidanceJob& job, std::uint32_t i, HalfPlane& out) {
+  if (job.tether_reach.empty() || !(job.tether_reach[i] > 0.0f)) return false;
+  const vec2 e(-job.tether_dx[i], -job.tether_dz[i]);
+  const float r2 = length_squared(e);
+  if (r2 < kTinySquared) return false;
+  const float r = std::sqrt(r2);
+  const float max_speed = job.max_speed[i];
+  const float limit = std::max((job.tether_reach[i] - r) / job.params.dt, -max_speed);
+  if (limit >= max_speed) return false;  // no velocity the agent may take reaches the tether's edge
+  out = at_most_along(e / r, limit);
+  return true;
+}
+
 // Agent i's new velocity from its chosen neighbours (sorted) and obstacle edges.
 template <class ForEachEdge>
 vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t neighbour_count,
@@ -430,6 +453,17 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   vec2 result;
   const std::size_t failed = solve_2d(planes.data(), count, max_speed, preferred, false, result);
   infeasible = failed < count;
+  // The tether, when the half-planes leave a velocity within it: the one nearest the preferred among those. The
+  // half-planes' permitted set is unchanged, so is the guarantee avoidance gives every neighbour (each takes its
+  // half of every avoidance); the tether only picks another velocity within it, and is let go for this step where
+  // none is within it. Rejected: the tether as a hard plane like an obstacle's: in the crossing's jams tethered
+  // agents could not give way and 345 pairs overlapped, by up to 49 cm.
+  HalfPlane tether;
+  if (!infeasible && tether_plane(job, i, tether) && violation(tether, result) > 0.0f) {
+    planes[count] = tether;
+    vec2 trial;
+    if (solve_2d(planes.data(), count + 1, max_speed, preferred, false, trial) == count + 1) result = trial;
+  }
   if (failed < count) {
     // Obstacles stay hard unless they alone leave nothing (the agent wedged in a corner it overlaps).
     const std::size_t keep_hard = failed < hard ? 0 : hard;
@@ -534,6 +568,17 @@ bool validate_job(const AvoidanceJob& job, bool need_scratch) {
       return false;
     if (!(job.radius[i] > 0.0f && job.radius[i] <= kAvoidanceMaxRadius)) return false;
     if (!(job.max_speed[i] >= 0.0f && job.max_speed[i] <= kAvoidanceMaxSpeed)) return false;
+  }
+  if (!job.tether_reach.empty() || !job.tether_dx.empty() || !job.tether_dz.empty()) {
+    if (job.tether_reach.size() != n || job.tether_dx.size() != n || job.tether_dz.size() != n) return false;
+    for (const float* in : {job.tether_dx.data(), job.tether_dz.data(), job.tether_reach.data()})
+      for (const float* o : outs)
+        if (overlaps(o, in)) return false;
+    for (std::size_t i = 0; i < n; ++i)
+      if (!finite_within(job.tether_dx[i], kAvoidanceMaxCoordinate) ||
+          !finite_within(job.tether_dz[i], kAvoidanceMaxCoordinate) ||
+          !finite_within(job.tether_reach[i], kAvoidanceMaxCoordinate))
+        return false;
   }
   return true;
 }

@@ -3,7 +3,7 @@
 // n-body collision avoidance", ISRR 2011), over SoA agent columns. Each agent takes one half-plane of permitted
 // velocities per neighbour (each side taking half the responsibility for avoiding the other) and one per nearby
 // static obstacle edge, and picks the permitted velocity nearest its preferred one: a 2-D linear program. When the
-// half-planes leave nothing (dense jams), the paper's 3-D fallback: obstacle half-planes stay hard, and the largest
+// half-planes leave nothing (dense jams), the paper's 3-D fallback: obstacle and tether half-planes stay hard, and the largest
 // violation of the others is minimised, each weighted by 1 / gap to that neighbour; among the velocities achieving
 // that minimum, the one nearest the preferred; those agents are then solved once more against their neighbours'
 // first answers (AvoidanceParameters::second_pass). Neighbours come from a uniform spatial grid rebuilt each step.
@@ -125,6 +125,12 @@ struct AvoidanceJob {
   std::span<const float> radius;          // m, > 0
   std::span<const float> max_speed;       // m/s, >= 0
   std::span<float> new_vx, new_vz;        // written
+  // Optional (empty, or all three of length n): a tether per agent. Its next position p + v dt stays within
+  // tether_reach of the point p + (tether_dx, tether_dz) whenever a velocity meeting every other half-plane does
+  // (otherwise the tether is dropped for this step: it never costs a neighbour its avoidance). Crowds tether an
+  // agent to its walking body, which a planted foot may hold back (systems/locomotion.h GaitStyle::lag_dip): an
+  // agent that ran on ahead of its feet would leave them dragging. tether_reach <= 0 means no tether.
+  std::span<const float> tether_dx, tether_dz, tether_reach;
   const ObstacleSet* obstacles = nullptr;  // may be null: no static obstacles
   AvoidanceParameters params;
   AvoidanceScratch* scratch = nullptr;

@@ -175,6 +175,9 @@ AnklePose rolled_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
   return {ball + q * ((rig.ankle_rest[leg] - rig.ball_rest[leg]) * scale), q};
 }
 
+// How much of the ankle's inversion / eversion a stance leg leaning sideways may use (walk_one's body hold).
+constexpr float kRollUsed = 0.85f;
+
 // How far short of the ankle's plantarflexion limit the heel hold stops rolling the foot (rad).
 constexpr float kAnkleLimitMargin = 0.02f;
 
@@ -241,11 +244,17 @@ AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
     }
     p = std::min(q, 1.3f);
     pose = rolled_pose(rig, leg, plant, h, p, scale);
+  }
+  if (hold) {
     // No further than the ankle plantarflexes: past its limit IK keeps the shin and turns the foot about the ankle
     // and the toe lifts off the ground, as it did for agents whose body had moved on (the plaza's largest slide
-    // 81 -> 63 mm with this, measured with an earlier form of the body's lag). The shin leans forward of the
-    // ankle-hip line by the knee's bend at this distance. A free walk never comes near it (0 orientation clamps
+    // 81 -> 63 mm with this, measured with an earlier form of the body's lag), and for agents pushed back over a
+    // foot planted ahead, whose shin leans back while the schedule raises the heel (issue 16: the crossing's
+    // toe tips 5-11 cm up at 80 % of stance, the ankle 0.2-0.5 m in front of the hip). The shin leans forward of
+    // the ankle-hip line by the knee's bend at this distance. Below the schedule too: the least pitch the
+    // schedule asks is for a body going on over its foot. A free walk never comes near it (0 orientation clamps
     // over the gait report, which this leaves unchanged).
+    const glm::quat to_foot = glm::conjugate(h);
     const glm::vec3 to_hip = to_foot * (hold->hip - pose.position);
     const float d = std::min(glm::length(to_hip), rig.leg_reach[leg] * scale);
     const float a = rig.thigh_length[leg] * scale, b = rig.shin_length[leg] * scale;
@@ -253,7 +262,7 @@ AnklePose stance_pose(const LocomotionRig& rig, int leg, const glm::vec3& plant,
     const float most = std::atan2(to_hip.z, to_hip.y) + bend - rig.rest_ankle_dorsiflexion +
                        rig.ankle_plantarflexion_limit - kAnkleLimitMargin;
     if (p > most) {
-      p = std::max(most, heel_rise_pitch(tau, style));
+      p = std::max(most, 0.0f);
       pose = rolled_pose(rig, leg, plant, h, p, scale);
     }
   }
@@ -282,11 +291,6 @@ struct GaitRef {
 // The step length (m at rig scale) the walk's step-dependent shapes are set for: the strike pitch, the lead's
 // fraction and the arm swing scale with a step against it.
 constexpr float kReferenceStep = 0.7f;
-
-// The furthest an agent's body may be off its agent (m at rig scale; GaitStyle::lag_dip), about an agent's radius.
-// Unbounded, lags ran to 2.7 m in the crossing (a body held back stance after stance, or pulled on by a foot landed
-// beyond reach ahead); beyond this the foot drags instead of the body leaving its disc.
-constexpr float kMaxLag = 0.3f;
 
 // This frame's step (an agent's shortened by its speed ratio) in reference steps.
 float reference_steps(const GaitParameters& gp, const GroundTrack& track, float scale) {
@@ -524,11 +528,19 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
     track.velocity = glm::vec2(a.at(kAgentVx, i), a.at(kAgentVz, i)) + catch_up;
     track.speed = glm::length(track.velocity);
     track.turn_rate = turn_rate_at(track.speed, style.turn_rate, style.turn_in_place_rate);
-    glm::vec2 face = {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)};
-    if (glm::length(face) < 0.05f) face = track.velocity;
-    if (glm::length(face) > 0.05f) track.turn = wrap_angle(std::atan2(face.x, face.y) - track.heading);
+    const glm::vec2 face = facing_direction({a.at(kAgentVx, i), a.at(kAgentVz, i)},
+                                            {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)}, style.face_velocity_speed,
+                                            style.face_side_angle);
+    if (face.x != 0.0f || face.y != 0.0f) track.turn = wrap_angle(std::atan2(face.x, face.y) - track.heading);
     const glm::vec2 to_target = glm::vec2(a.at(kAgentTargetX, i), a.at(kAgentTargetZ, i)) - track.position;
-    if (track.speed > 0.05f && glm::length(to_target) > 0.3f)
+    // The course turns towards the steering target only while the agent goes where it wishes (navigation turns
+    // the wish that way). Carried off its wish by avoidance, it is predicted straight on: predicted turning back
+    // to a target avoidance kept it from, footprints landed on a curve the body never took, beside and ahead of
+    // it (a walker carried across its wish at 1.1 m/s: 11 mm of slide, 0.08 mm predicted straight on).
+    const glm::vec2 agent_v(a.at(kAgentVx, i), a.at(kAgentVz, i)), wish(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i));
+    const bool steering =
+        glm::length(agent_v - wish) <= style.steering_tolerance * std::max(glm::length(wish), style.stand_speed);
+    if (steering && track.speed > 0.05f && glm::length(to_target) > 0.3f)
       track.course_turn = wrap_angle(std::atan2(to_target.x, to_target.y) - std::atan2(track.velocity.x, track.velocity.y));
     if (std::hypot(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)) < style.stand_speed)
       track.stop_distance = track.speed * track.speed / (2.0f * style.agent_braking);
@@ -863,11 +875,11 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       const float tau = std::min(frac(phase - 0.5f * static_cast<float>(leg)) / sf, 1.0f);
       // The foot may pivot only while one point carries it: the heel before foot flat, the toe tip once the toes
       // bend no further. Flat, or rolling over the ball with the toes down, it holds (both ball and tip would move).
-      // The schedule's pitch is the least the heel has risen (the hold may have raised it sooner), so a foot read
-      // as on its tip is on it; one the hold already put there waits for the schedule, as every foot did before.
-      const float roll = tau >= style.heel_off
-                             ? heel_rise_pitch(tau, style)
-                             : 0.0f;
+      // Read off the pitch the foot had in the last frame, not the heel rise's schedule: the ankle's
+      // plantarflexion limit may hold a foot below the schedule (stance_pose), and such a foot, on its ball,
+      // pivoted about its tip slid the ball 5 cm (the crossing). Rolling on, it goes onto its tip in this frame
+      // at the earliest and pivots from the next.
+      const float roll = tau >= style.heel_off ? g.leg(leg, kLegStancePitch) : 0.0f;
       const bool on_heel = tau < style.heel_rocker, on_tip = roll > rig.toe_limit;
       const float heading = g.leg(leg, kLegPlantHeading);
       const float twist = wrap_angle(heading - pelvis.heading);
@@ -974,7 +986,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     // ground (a trace in the crossing: the root 0.7 m below standing, the hip level with the ankle it strained
     // for) and IK would drag the foot (foot slide up to 17 cm). Instead the body stays where each stance leg
     // still reaches its foot with the pelvis at most lag_dip below standing, off the agent by the difference
-    // (kGaitLagX/Z, at most kMaxLag), which eases out (advance_gait_clock) once the foot lifts. The agent's own
+    // (kGaitLagX/Z, at most kBodyLagMax), which eases out (advance_gait_clock) once the foot lifts. The agent's own
     // position, the one avoidance keeps clear of others, is untouched: the body trails its disc by centimetres
     // for a moment. A foot that landed beyond reach ahead holds the body too (it is the body that fell behind).
     // Rejected: only feet behind the hip holding it (the crossing's largest slide 88 -> 117 mm: pushed back in
@@ -988,16 +1000,32 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       const float below = hip.y - style.lag_dip / scale - a.y;  // hip above the ankle at the lowest pelvis
       if (below <= 0.0f || below >= reach) continue;
       const float allowed = std::sqrt(reach * reach - below * below);
-      const glm::vec2 apart(hip.x - a.x, hip.z - a.z);
+      glm::vec2 apart(hip.x - a.x, hip.z - a.z);
       const float d = glm::length(apart);
-      if (d > allowed) back -= glm::vec3(apart.x, 0.0f, apart.y) * ((d - allowed) / d);
+      if (d > allowed) {
+        back -= glm::vec3(apart.x, 0.0f, apart.y) * ((d - allowed) / d);
+        apart *= allowed / d;
+      }
+      // Sideways, the shin leans over the foot's long axis and the ankle inverts or everts as far as it leans: at
+      // most ankle_roll_limit (20 degrees for H-Anim's default), past which IK clamps the foot's orientation and
+      // its edge or toe tip leaves the ground (issue 16: a jam's sidesteps left bodies 42 cm to the side of a
+      // planted foot, the toe tip 7 cm up). Measured across the foot (its heading), from the rest stance's offset.
+      const float foot_yaw = legs[leg].plant_heading - pelvis.heading;
+      const glm::vec2 across(std::cos(foot_yaw), -std::sin(foot_yaw));  // the foot's +X in the body's frame
+      const float rest_across = rig.hip_rest[leg].x - rig.ankle_rest[leg].x;
+      const float lateral = glm::dot(apart, across) - rest_across;
+      const float lateral_room = below * std::tan(kRollUsed * rig.ankle_roll_limit);
+      if (std::abs(lateral) > lateral_room) {
+        const float excess = lateral - std::copysign(lateral_room, lateral);
+        back -= glm::vec3(across.x, 0.0f, across.y) * excess;
+      }
     }
     if (back.x != 0.0f || back.z != 0.0f) {
       glm::vec3 shift = yaw(pelvis.heading) * back * scale;  // world
-      // At most kMaxLag (scaled) off: a foot that held the body longer drags rather than the body leaving its disc
+      // At most kBodyLagMax (scaled) off: a foot that held the body longer drags rather than the body leaving its disc
       // (the early lift and the hurry end such stances first).
       glm::vec2 lag = glm::vec2(g[kGaitLagX] + shift.x, g[kGaitLagZ] + shift.z);
-      const float most = kMaxLag * scale;
+      const float most = kBodyLagMax * scale;
       if (glm::length(lag) > most) {
         const glm::vec2 bounded = lag * (most / glm::length(lag));
         shift.x -= lag.x - bounded.x;
@@ -1084,8 +1112,10 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   write_quat(lanes, rig.root, i, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
   write_quat(lanes, rig.sacroiliac, i, motion.sacro);
   write_quat(lanes, rig.spine, i, yaw(-0.5f * motion.yaw));
-  for (int leg = 0; leg < 2; ++leg)
+  for (int leg = 0; leg < 2; ++leg) {
     write_quat(lanes, rig.ball[leg], i, pitch(-std::min(toe_pitch[leg], rig.toe_limit)));
+    g.leg(leg, kLegStancePitch) = legs[leg].swinging ? 0.0f : toe_pitch[leg];
+  }
 
   // ---- IK goals --------------------------------------------------------------------------------------------
   for (int leg = 0; leg < 2; ++leg) {
@@ -1211,6 +1241,7 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
   rig.toe_limit = toe.present ? std::max(-toe.lower.x, 0.0f) : 0.6f;
   const JointLimits& ankle = skeleton.limits[rig.limbs[kLeftLeg].lower];
   rig.ankle_plantarflexion_limit = ankle.present ? ankle.upper.x : 1.0f;
+  rig.ankle_roll_limit = ankle.present ? std::max(std::min(-ankle.lower.z, ankle.upper.z), 0.0f) : 0.35f;
   const std::int32_t tip = skeleton.find_site("skull_tip");
   if (tip >= 0) {
     rig.rig_height = skeleton.sites[tip].position.y;

@@ -45,6 +45,12 @@
 namespace strata {
 
 // Tuning of the walk; defaults give a natural adult walk. Angles in radians, lengths in metres at rig scale.
+// The furthest an agent's body may be off its agent (m at rig scale; GaitStyle::lag_dip), about an agent's radius.
+// Unbounded, lags ran to 2.7 m in the crossing (a body held back stance after stance, or pulled on by a foot landed
+// beyond reach ahead); beyond this the foot drags instead of the body leaving its disc. Crowds tether each agent
+// within a share of it of its body (scene/crowd_agents.h CrowdAgents::tether_share), so it is seldom reached.
+inline constexpr float kBodyLagMax = 0.3f;
+
 struct GaitStyle {
   float pelvis_yaw = 0.07f;          // pelvic rotation amplitude about the vertical (~4 deg)
   float pelvis_tilt = 0.07f;         // pelvic list amplitude (~4 deg), swing side down
@@ -167,6 +173,14 @@ struct GaitStyle {
   // Gait initiation reaches walking speed in about three steps; 1.2 lengthened the second step past what the
   // trailing leg reaches (IK missed by 4 cm for a tenth of a second).
   float agent_acceleration = 0.8f;
+  // Agents carried by avoidance at this speed (m/s) or faster, within face_side_angle (rad) of where they want to
+  // go, face where they go (systems/agent_move.h facing_direction): a person edging through a crowd turns the body
+  // into the gap rather than walking sideways.
+  float face_velocity_speed = 0.4f;
+  float face_side_angle = 1.6f;
+  // Agents: the walk predicts the course turning towards the steering target while the velocity is within this
+  // share of the wish's speed of the wish (systems/locomotion.cpp advance_gait_clock); straight on otherwise.
+  float steering_tolerance = 0.3f;
   // Agents: the most a stance foot's heading may differ from the body's before it pivots on its contact (rad).
   float max_foot_twist = 0.5f;
   // Agents: how much faster the gait phase runs while a stance leg's goal was out of IK's reach in the last frame.
@@ -240,6 +254,7 @@ struct LocomotionRig {
   float leg_reach[2] = {0, 0};       // |hip-knee| + |knee-ankle|
   float thigh_length[2] = {0, 0}, shin_length[2] = {0, 0};  // |hip-knee|, |knee-ankle|
   float ankle_plantarflexion_limit = 1.0f;  // the ankle's upper x limit (rad, toes down), from the skeleton
+  float ankle_roll_limit = 0.35f;           // the least of the ankle's z limits (inversion / eversion, rad)
   // The rest pose's own joint angles in a gait lab's terms (radians, sagittal, left leg; flexion and dorsiflexion
   // positive): thigh against the pelvis' vertical, shin against the thigh, shin's forward lean over the flat rest
   // foot. A gait lab's zero is a standing body with vertical thigh and shin over a flat foot; a skeleton's rest

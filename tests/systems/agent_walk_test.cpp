@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <optional>
 #include <memory>
 
 #include <glm/geometric.hpp>
@@ -53,6 +54,8 @@ struct AgentWalker {
     move.turn_in_place_rate = c.motion.style.turn_in_place_rate;
     move.acceleration = c.motion.style.agent_acceleration;
     move.braking = c.motion.style.agent_braking;
+    move.face_velocity_speed = c.motion.style.face_velocity_speed;
+    move.face_side_angle = c.motion.style.face_side_angle;
     run_or_throw(make_start_walking_job(*c.motion.locomotion, c.motion.paths, t, 0, c.motion.style, true), "start");
     run_or_throw(make_ik_job(c.rig().skeleton, c.motion.locomotion->limbs, t), "ik");
     run_or_throw(make_fk_job(c.rig().skeleton, t), "fk");
@@ -63,7 +66,9 @@ struct AgentWalker {
 
   // One frame with the agent wishing to move at `wish` (m/s, ground x and z); `before_locomotion` may change the
   // walker's columns between agent_move and locomotion (what the last IK run reported, say).
-  void frame(glm::vec2 wish, float dt, const std::function<void(SoaTable&)>& before_locomotion = {}) {
+  // `carried`: the velocity avoidance chose, when it is not the wish's (someone in the way).
+  void frame(glm::vec2 wish, float dt, const std::function<void(SoaTable&)>& before_locomotion = {},
+             std::optional<glm::vec2> carried = std::nullopt) {
     Crowd& c = *crowd;
     SoaTable& t = table();
     // As navigation does: the wish goes through what the body can follow; no one to avoid, so avoidance would
@@ -75,6 +80,10 @@ struct AgentWalker {
     t.f32(kWalkerAgent, kAgentTargetZ)[0] = t.f32(kWalkerAgent, kAgentPz)[0] + 10.0f * wish.y;
     t.f32(kWalkerAgent, kAgentOrcaVx)[0] = t.f32(kWalkerAgent, kAgentPrefVx)[0] = pref.x;
     t.f32(kWalkerAgent, kAgentOrcaVz)[0] = t.f32(kWalkerAgent, kAgentPrefVz)[0] = pref.y;
+    if (carried) {
+      t.f32(kWalkerAgent, kAgentOrcaVx)[0] = carried->x;
+      t.f32(kWalkerAgent, kAgentOrcaVz)[0] = carried->y;
+    }
     run_or_throw(make_agent_move_job(t, dt, move), "agent_move");
     if (before_locomotion) before_locomotion(t);
     run_or_throw(make_locomotion_job(*c.motion.locomotion, c.motion.paths, t, dt, c.motion.style, true), "locomotion");
@@ -268,6 +277,67 @@ TEST(AgentWalk, ARollingFootOutOfReachLiftsEarly) {
     for (std::uint32_t c = 0; c < kAgentFloats; ++c) ASSERT_TRUE(std::isfinite(pushed.agent(c)));
   }
   EXPECT_TRUE(landed);
+}
+
+// Where a body faces: its wish, or, carried at a walking pace within face_side_angle of it, where it goes.
+TEST(AgentWalk, FacingDirectionIsTheWishUnlessCarriedAcrossAtWalkingPace) {
+  const float speed = 0.6f, side = 1.4f;
+  const glm::vec2 wish(0.0f, 1.2f);
+  EXPECT_EQ(facing_direction({1.0f, 0.2f}, wish, speed, side), glm::vec2(1.0f, 0.2f)) << "79 deg off, 1 m/s";
+  EXPECT_EQ(facing_direction({0.3f, 0.1f}, wish, speed, side), wish) << "too slow to turn the body";
+  EXPECT_EQ(facing_direction({0.5f, -0.9f}, wish, speed, side), wish) << "carried backwards: it steps back";
+  EXPECT_EQ(facing_direction({0.7f, 0.0f}, {0.0f, 0.01f}, speed, side), glm::vec2(0.7f, 0.0f)) << "no wish";
+  EXPECT_EQ(facing_direction({0.01f, 0.0f}, {0.0f, 0.01f}, speed, side), glm::vec2(0.0f)) << "nothing either way";
+}
+
+// Carried across its wish at a walking pace for a few seconds (avoidance sending it round someone), a walker turns
+// to face where it goes and keeps its feet planted; told to keep facing its wish, the same walker walks sideways on a
+// forward gait.
+TEST(AgentWalk, ACarriedBodyTurnsToWhereItGoesAndKeepsItsFeet) {
+  const glm::vec2 wish(0.0f, 1.2f), carried(1.1f, 0.3f);
+  double slide[2] = {0.0, 0.0};
+  float heading_after[2] = {0.0f, 0.0f};
+  for (int facing = 0; facing < 2; ++facing) {
+    AgentWalker w;
+    if (facing == 0) w.move.face_velocity_speed = w.crowd->motion.style.face_velocity_speed = 1e6f;
+    GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
+    const float dt = 1.0f / 60.0f;
+    for (int f = 0; f < 240; ++f) {
+      w.frame(f < 90 ? wish : wish, dt, {}, f < 90 ? std::nullopt : std::optional<glm::vec2>(carried));
+      metrics.observe(walker_lanes(w.table(), w.crowd->joint_count()), w.crowd->motion.paths, dt);
+      for (std::uint32_t c = 0; c < kAgentFloats; ++c) ASSERT_TRUE(std::isfinite(w.agent(c)));
+    }
+    slide[facing] = metrics.report().foot_slide_mm_max;
+    heading_after[facing] = w.agent(kAgentHeading);
+  }
+  std::printf("carried across: foot slide %.2f mm facing its wish, %.2f mm turned; heading %.2f / %.2f rad\n",
+              slide[0], slide[1], heading_after[0], heading_after[1]);
+  EXPECT_NEAR(heading_after[1], std::atan2(carried.x, carried.y), 0.05f) << "turned to where it goes";
+  EXPECT_NEAR(heading_after[0], 0.0f, 0.05f) << "told to, it keeps facing its wish";
+  EXPECT_LT(slide[1], 1.0);
+}
+
+// Carried backwards (someone walking into it), a walker keeps facing its wish and steps back; the foot it had planted
+// ahead stays down, its heel neither raised by the stance's schedule past what the ankle allows under a shin
+// leaning back nor left to drag.
+TEST(AgentWalk, ACarriedBackBodyStepsBackWithItsFeetDown) {
+  for (const float back : {0.3f, 0.6f}) {
+    AgentWalker w;
+    GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
+    const float dt = 1.0f / 60.0f;
+    const glm::vec2 wish(0.0f, 1.2f);
+    for (int f = 0; f < 300; ++f) {
+      w.frame(wish, dt, {}, f < 120 ? std::nullopt : std::optional<glm::vec2>(glm::vec2(0.0f, -back)));
+      metrics.observe(walker_lanes(w.table(), w.crowd->joint_count()), w.crowd->motion.paths, dt);
+      for (std::uint32_t c = 0; c < kAgentFloats; ++c) ASSERT_TRUE(std::isfinite(w.agent(c)));
+    }
+    const GaitReport r = metrics.report();
+    std::printf("carried back at %.1f m/s: foot slide %.2f mm, orientation clamps %zu\n", back, r.foot_slide_mm_max,
+                static_cast<std::size_t>(r.ik_orientation_clamped));
+    EXPECT_NEAR(w.agent(kAgentHeading), 0.0f, 0.05f) << "it keeps facing its wish";
+    EXPECT_LT(w.agent(kAgentPz), 1.6f) << "it went back";
+    EXPECT_LT(r.foot_slide_mm_max, 1.0);
+  }
 }
 
 TEST(AgentWalk, AgentMoveRefusesNonFiniteVelocities) {

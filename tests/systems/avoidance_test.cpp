@@ -523,6 +523,91 @@ TEST(Avoidance, ValidateRefusesBadInputAndWritesNothing) {
   }
 }
 
+// A tether keeps an agent within reach of its point when the half-planes allow it, and gives way to them when
+// they do not: it never costs a neighbour its avoidance.
+TEST(Avoidance, TetherHoldsAnAgentOnlyWhereAvoidanceAllows) {
+  const float dt = 1.0f / 30.0f;
+  AvoidanceScratch scratch;
+  // Alone, wanting to go on at 1.4 m/s along +x, 0.19 m ahead of its tether point (reach 0.2): it may move on by
+  // 1 cm this step, and keeps its full speed across.
+  Crowd c;
+  c.add({0.0f, 0.0f}, {10.0f, 0.0f});
+  c.set_preferred();
+  std::vector<float> dx{-0.19f}, dz{0.0f}, reach{0.2f};
+  AvoidanceJob job = c.job(scratch);
+  job.params.dt = dt;
+  job.tether_dx = dx, job.tether_dz = dz, job.tether_reach = reach;
+  ASSERT_TRUE(job.run());
+  EXPECT_NEAR(c.new_vx[0], 0.01f / dt, 1e-3f);
+  EXPECT_NEAR(c.new_vz[0], 0.0f, 1e-4f);
+  // Beyond its reach it is drawn back towards the point.
+  dx[0] = -0.25f;
+  ASSERT_TRUE(job.run());
+  EXPECT_NEAR(c.new_vx[0], -0.05f / dt, 1e-3f);
+  // A tether that cannot bind this step changes nothing.
+  dx[0] = -0.01f;
+  ASSERT_TRUE(job.run());
+  EXPECT_NEAR(c.new_vx[0], 1.4f, 1e-4f);
+  // The same agent with a neighbour closing in head-on from behind the tether point's side: avoidance must move it
+  // on, so the tether is let go; the velocity is the untethered one, bit for bit.
+  Crowd pair;
+  pair.add({0.0f, 0.0f}, {0.0f, 0.0f});
+  pair.add({-0.62f, 0.0f}, {10.0f, 0.0f});
+  pair.set_preferred();
+  pair.vx[1] = 1.4f;
+  AvoidanceJob free_job = pair.job(scratch);
+  free_job.params.dt = dt;
+  ASSERT_TRUE(free_job.run());
+  const float free_vx = pair.new_vx[0], free_vz = pair.new_vz[0];
+  ASSERT_GT(free_vx, 0.3f);  // it gives way forwards
+  std::vector<float> pdx{-0.2f, 0.0f}, pdz{0.0f, 0.0f}, preach{0.2f, 0.0f};
+  AvoidanceJob tethered = pair.job(scratch);
+  tethered.params.dt = dt;
+  tethered.tether_dx = pdx, tethered.tether_dz = pdz, tethered.tether_reach = preach;
+  ASSERT_TRUE(tethered.run());
+  EXPECT_EQ(pair.new_vx[0], free_vx);
+  EXPECT_EQ(pair.new_vz[0], free_vz);
+  // The twin agrees on a tethered crowd.
+  Crowd crowd = random_crowd(300, 25.0f, 3);
+  std::vector<float> tx(crowd.size()), tz(crowd.size()), tr(crowd.size());
+  for (std::size_t i = 0; i < crowd.size(); ++i) {
+    tx[i] = 0.25f * std::sin(static_cast<float>(i));
+    tz[i] = 0.25f * std::cos(static_cast<float>(3 * i));
+    tr[i] = i % 5 == 0 ? 0.0f : 0.2f;
+  }
+  AvoidanceJob many = crowd.job(scratch);
+  many.tether_dx = tx, many.tether_dz = tz, many.tether_reach = tr;
+  ASSERT_TRUE(many.run());
+  const std::vector<float> fast_x = crowd.new_vx, fast_z = crowd.new_vz;
+  ASSERT_TRUE(strata::run_avoidance_reference(many));
+  EXPECT_EQ(fast_x, crowd.new_vx);
+  EXPECT_EQ(fast_z, crowd.new_vz);
+}
+
+TEST(Avoidance, ValidateRefusesBadTethers) {
+  AvoidanceScratch scratch;
+  Crowd c = random_crowd(10, 5.0f, 1);
+  std::vector<float> dx(10, 0.0f), dz(10, 0.0f), reach(10, 0.2f);
+  AvoidanceJob job = c.job(scratch);
+  job.tether_dx = dx, job.tether_dz = dz, job.tether_reach = reach;
+  EXPECT_TRUE(job.validate());
+  job.tether_reach = std::span<const float>(reach).first(9);  // lengths differ
+  EXPECT_FALSE(job.validate());
+  job.tether_reach = reach;
+  job.tether_dz = {};  // only some of the three
+  EXPECT_FALSE(job.validate());
+  job.tether_dz = dz;
+  dx[4] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(job.validate());
+  EXPECT_FALSE(job.run());
+  dx[4] = 0.0f;
+  reach[2] = std::numeric_limits<float>::infinity();
+  EXPECT_FALSE(job.validate());
+  reach[2] = 0.2f;
+  job.new_vx = std::span<float>(dx);  // output aliasing a tether input
+  EXPECT_FALSE(job.validate());
+}
+
 TEST(ObstacleSetTest, WindingIsNormalisedAndBadPolygonsThrow) {
   const std::vector<vec2> ccw = box({0.0f, 0.0f}, {2.0f, 1.0f});
   const std::vector<vec2> cw(ccw.rbegin(), ccw.rend());
