@@ -78,9 +78,10 @@ struct CrowdAgents {
   // crowds so tight that far more of them stalled (crossing: 31 % through in 90 s against 55 % with 2 cm).
   float radius_margin = 0.02f;
   // Avoidance keeps each agent within this share of kBodyLagMax (systems/locomotion.h, at the walker's scale) of
-  // its body, which planted feet may hold back: an agent running on ahead, as a jam's sidesteps carried them,
-  // left the body stretching for it and its feet dragging (issue 16). Below 1 so the body's own bound is seldom
-  // met (the tether is kept to first order within a step; see avoidance.cpp tether_plane).
+  // its body, which planted feet may hold back, whenever its half-planes leave a velocity that does (AvoidanceJob::
+  // tether_dx): an agent running on ahead, as a jam's sidesteps carried them, left the body stretching for it and
+  // its feet dragging (issue 16). Below 1 to leave the body's own bound room (the tether is kept to first order
+  // within a step; avoidance.cpp tether_plane); 0.5 let 8 pairs overlap in one crossing run (docs/crowds.md).
   float tether_share = 0.75f;
   std::uint32_t plans_per_step = 24;  // most paths planned in one step (those without a path first)
   double navigation_build_ms = 0;     // building (or loading) the navigation mesh

@@ -21,6 +21,7 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
   if (job.gait.at(kGaitIdle, i) > 0.0f) vx = vz = 0.0f;
   const float speed = std::hypot(vx, vz);
   const glm::vec2 face = facing_direction({vx, vz}, {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)},
+                                          {a.at(kAgentTargetX, i) - a.at(kAgentPx, i), a.at(kAgentTargetZ, i) - a.at(kAgentPz, i)},
                                           p.face_velocity_speed, p.face_side_angle);
   float heading = a.at(kAgentHeading, i);
   if (face.x != 0.0f || face.y != 0.0f) {
@@ -49,13 +50,14 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
 
 }  // namespace
 
-glm::vec2 facing_direction(glm::vec2 velocity, glm::vec2 preferred, float walking_speed, float side_angle) {
+glm::vec2 facing_direction(glm::vec2 velocity, glm::vec2 preferred, glm::vec2 to_target, float walking_speed,
+                           float side_angle) {
   constexpr float kDirectionless = 0.05f;  // m/s
   const float pref = std::hypot(preferred.x, preferred.y), speed = std::hypot(velocity.x, velocity.y);
   if (pref < kDirectionless) return speed < kDirectionless ? glm::vec2(0.0f) : velocity;
-  if (speed >= walking_speed &&
-      velocity.x * preferred.x + velocity.y * preferred.y >= std::cos(side_angle) * speed * pref)
-    return velocity;
+  const float target = std::hypot(to_target.x, to_target.y);
+  const glm::vec2 way = target > 1e-4f ? to_target / target : preferred / pref;
+  if (speed >= walking_speed && velocity.x * way.x + velocity.y * way.y >= std::cos(side_angle) * speed) return velocity;
   return preferred;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // Agent motion: moves each steered agent with exactly the velocity avoidance chose (its collision-free guarantee
-// holds for that velocity and no other) and turns the body towards it at a limited rate (GaitStyle::turn_rate), or,
-// nearly still, towards where it wants to go (turning on the spot). What makes the motion one a body can walk is
+// holds for that velocity and no other) and turns the body at a limited rate (GaitStyle::turn_rate) towards where it
+// wants to go, or, carried at a walking pace not far off the way to its target, towards where it goes
+// (facing_direction below; turning on the spot when nearly still). What makes the motion one a body can walk is
 // upstream: navigation's preferred velocity goes through followable_velocity below (turning, slowing while facing
 // away, acceleration and braking limits), and avoidance departs from it only to avoid someone. A walker standing
 // (kGaitIdle > 0, systems/locomotion.h) is held still until it has left its stance. Also keeps the bookkeeping
@@ -11,7 +12,8 @@
 // Rejected: limiting avoidance's velocity here (the body turning and accelerating after it). The velocity then
 // left the set avoidance had proved collision-free, and a 24-agent circle overlapped by 10 cm.
 //
-//   reads:  agent (avoidance velocity, preferred velocity, position, heading, goal, corners), gait (idle), dt
+//   reads:  agent (avoidance velocity, preferred velocity, position, heading, steering target, goal, corners),
+//           gait (idle), dt
 //   writes: agent (position, velocity, heading, best distance, time since progress, travel time)
 #include <cmath>
 #include <cstddef>
@@ -38,12 +40,17 @@ inline float turn_rate_at(float speed, float walking, float in_place) {
 }
 
 // Where a walking body faces: where it wants to go (`preferred`), or, carried by avoidance at a walking pace
-// within `side_angle` of that, where it goes. Pushed aside or back it steps that way without turning round:
-// facing its velocity whatever it was made pushed agents turn their backs on their goal and take seconds to turn
-// back (half a test room never reached its door). But a body facing its goal while avoidance carried it across at
-// 1.3-1.4 m/s (the crossing's jams) walked sideways with a forward gait, its feet planted 0.6 m off the line it
-// went along and dragged. Wanting nothing, it faces where it goes. Zero when neither has a direction.
-glm::vec2 facing_direction(glm::vec2 velocity, glm::vec2 preferred, float walking_speed, float side_angle);
+// within `side_angle` of the way to its steering target (`to_target`; the preferred velocity when that is zero),
+// where it goes. Pushed aside or back it steps that way without turning round: facing its velocity whatever it was
+// made pushed agents turn their backs on their goal and take seconds to turn back (half a test room never reached
+// its door). But a body facing its goal while avoidance carried it across at 1.3-1.4 m/s (the crossing's jams)
+// walked sideways on a forward gait, its feet planted 0.6 m off the line it went along, and dragged. Measured
+// against the target, not the preferred velocity: navigation turns the wish from the body's heading at the turn
+// rate (followable_velocity), so a body facing a crowd's flow wished along it, faced it, and was carried into the
+// other group's goal region (3 of the crossing's 200 never arrived). Wanting nothing, it faces where it goes. Zero
+// when neither has a direction.
+glm::vec2 facing_direction(glm::vec2 velocity, glm::vec2 preferred, glm::vec2 to_target, float walking_speed,
+                           float side_angle);
 
 struct AgentMoveParameters {
   // The walk's GaitStyle::turn_rate, turn_in_place_rate, agent_acceleration and agent_braking (the walk predicts

@@ -48,7 +48,7 @@ namespace strata {
 // The furthest an agent's body may be off its agent (m at rig scale; GaitStyle::lag_dip), about an agent's radius.
 // Unbounded, lags ran to 2.7 m in the crossing (a body held back stance after stance, or pulled on by a foot landed
 // beyond reach ahead); beyond this the foot drags instead of the body leaving its disc. Crowds tether each agent
-// within a share of it of its body (scene/crowd_agents.h CrowdAgents::tether_share), so it is seldom reached.
+// within a share of it of its body where avoidance allows (scene/crowd_agents.h CrowdAgents::tether_share).
 inline constexpr float kBodyLagMax = 0.3f;
 
 struct GaitStyle {

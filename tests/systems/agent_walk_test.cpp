@@ -279,15 +279,21 @@ TEST(AgentWalk, ARollingFootOutOfReachLiftsEarly) {
   EXPECT_TRUE(landed);
 }
 
-// Where a body faces: its wish, or, carried at a walking pace within face_side_angle of it, where it goes.
+// Where a body faces: its wish, or, carried at a walking pace within face_side_angle of the way to its target,
+// where it goes.
 TEST(AgentWalk, FacingDirectionIsTheWishUnlessCarriedAcrossAtWalkingPace) {
   const float speed = 0.6f, side = 1.4f;
-  const glm::vec2 wish(0.0f, 1.2f);
-  EXPECT_EQ(facing_direction({1.0f, 0.2f}, wish, speed, side), glm::vec2(1.0f, 0.2f)) << "79 deg off, 1 m/s";
-  EXPECT_EQ(facing_direction({0.3f, 0.1f}, wish, speed, side), wish) << "too slow to turn the body";
-  EXPECT_EQ(facing_direction({0.5f, -0.9f}, wish, speed, side), wish) << "carried backwards: it steps back";
-  EXPECT_EQ(facing_direction({0.7f, 0.0f}, {0.0f, 0.01f}, speed, side), glm::vec2(0.7f, 0.0f)) << "no wish";
-  EXPECT_EQ(facing_direction({0.01f, 0.0f}, {0.0f, 0.01f}, speed, side), glm::vec2(0.0f)) << "nothing either way";
+  const glm::vec2 wish(0.0f, 1.2f), ahead(0.0f, 10.0f);
+  EXPECT_EQ(facing_direction({1.0f, 0.2f}, wish, ahead, speed, side), glm::vec2(1.0f, 0.2f)) << "79 deg off, 1 m/s";
+  EXPECT_EQ(facing_direction({0.3f, 0.1f}, wish, ahead, speed, side), wish) << "too slow to turn the body";
+  EXPECT_EQ(facing_direction({0.5f, -0.9f}, wish, ahead, speed, side), wish) << "carried backwards: it steps back";
+  // The wish turned along a flow the body faced, the target behind it: carried along, it faces its wish, which turns
+  // back towards the target at the turn rate (followable_velocity), not where it goes.
+  EXPECT_EQ(facing_direction({1.0f, 0.0f}, {0.15f, 0.02f}, {-5.0f, -5.0f}, speed, side), glm::vec2(0.15f, 0.02f));
+  EXPECT_EQ(facing_direction({1.0f, 0.2f}, wish, glm::vec2(0.0f), speed, side), glm::vec2(1.0f, 0.2f))
+      << "no target: the wish's way";
+  EXPECT_EQ(facing_direction({0.7f, 0.0f}, {0.0f, 0.01f}, ahead, speed, side), glm::vec2(0.7f, 0.0f)) << "no wish";
+  EXPECT_EQ(facing_direction({0.01f, 0.0f}, {0.0f, 0.01f}, ahead, speed, side), glm::vec2(0.0f)) << "nothing either way";
 }
 
 // Carried across its wish at a walking pace for a few seconds (avoidance sending it round someone), a walker turns
