@@ -9,8 +9,8 @@
 namespace strata {
 namespace {
 
-// The wire form of a ghost: the entity index and eleven floats, no padding.
-constexpr std::size_t kGhostFloats = 11;
+// The wire form of a ghost: the entity index and twelve floats, no padding.
+constexpr std::size_t kGhostFloats = 12;
 constexpr std::size_t kGhostBytes = 4 + kGhostFloats * 4;
 // Of a border observation: the entity index and three floats.
 constexpr std::size_t kObservationBytes = 4 + 3 * 4;
@@ -52,7 +52,8 @@ std::vector<std::vector<std::uint8_t>> pack_ghosts(std::span<const AgentSnapshot
       [](const AgentSnapshot& s) { return s.pz; },
       [](std::vector<std::uint8_t>& out, const AgentSnapshot& s) {
         const float values[kGhostFloats] = {s.px,     s.pz,        s.vx,        s.vz,         s.pref_vx, s.pref_vz,
-                                            s.radius, s.max_speed, s.tether_dx, s.tether_dz, s.tether_reach};
+                                            s.radius, s.max_speed, s.tether_dx, s.tether_dz, s.tether_reach,
+                                            s.holds};
         put(out, &s.walker, 4);
         put(out, values, sizeof values);
       });
@@ -78,7 +79,7 @@ void unpack_ghosts(std::span<const std::uint8_t> bytes, std::vector<AgentSnapsho
     }
     s.px = v[0], s.pz = v[1], s.vx = v[2], s.vz = v[3], s.pref_vx = v[4], s.pref_vz = v[5];
     s.radius = v[6], s.max_speed = v[7];
-    s.tether_dx = v[8], s.tether_dz = v[9], s.tether_reach = v[10];
+    s.tether_dx = v[8], s.tether_dz = v[9], s.tether_reach = v[10], s.holds = v[11];
   }
 }
 

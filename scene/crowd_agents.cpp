@@ -223,7 +223,7 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
     a.mine[k] = {a.rows[k].walker, f(kAgentPx), f(kAgentPz), f(kAgentVx), f(kAgentVz), f(kAgentPrefVx),
                  f(kAgentPrefVz), f(kAgentRadius) + a.radius_margin, 1.25f * f(kAgentPrefSpeed),
                  t.f32(kWalkerGait, kGaitLagX)[r], t.f32(kWalkerGait, kGaitLagZ)[r],
-                 a.tether_share * kBodyLagMax * scale};
+                 a.tether_share * kBodyLagMax * scale, t.f32(kWalkerGait, kGaitIdle)[r] > 0.0f ? 1.0f : 0.0f};
   }
   // Spread over processes: the other processes' agents near this one's join in entity order (merged with this
   // process's, which win a tie: a walker nobody owns is kept by every process), so each of this process's agents
@@ -243,6 +243,7 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
   for (auto* v : {&a.px, &a.pz, &a.vx, &a.vz, &a.pref_vx, &a.pref_vz, &a.radius, &a.max_speed, &a.new_vx, &a.new_vz,
                   &a.tether_dx, &a.tether_dz, &a.tether_reach})
     v->resize(n);
+  a.holds.resize(n);
   a.order.resize(n);
   {
     std::size_t i = 0, j = 0, k = 0;
@@ -250,6 +251,7 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
       a.px[k] = s.px, a.pz[k] = s.pz, a.vx[k] = s.vx, a.vz[k] = s.vz;
       a.pref_vx[k] = s.pref_vx, a.pref_vz[k] = s.pref_vz, a.radius[k] = s.radius, a.max_speed[k] = s.max_speed;
       a.tether_dx[k] = s.tether_dx, a.tether_dz[k] = s.tether_dz, a.tether_reach[k] = s.tether_reach;
+      a.holds[k] = s.holds != 0.0f ? 1u : 0u;
       a.order[k++] = source;
     };
     while (i < a.mine.size() || j < a.ghosts.size()) {
@@ -281,6 +283,7 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
   job.tether_dx = a.tether_dx;
   job.tether_dz = a.tether_dz;
   job.tether_reach = a.tether_reach;
+  job.holds = a.holds;
   job.obstacles = a.obstacles && !a.obstacles->empty() ? a.obstacles.get() : nullptr;
   job.params = a.avoidance;
   job.params.dt = dt > 0.0f ? dt : a.avoidance.dt;

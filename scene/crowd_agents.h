@@ -40,6 +40,8 @@ struct AgentSnapshot {
   // Its tether (AvoidanceJob::tether_dx): the walking body's offset from the agent, and how far off it the agent
   // may go (<= 0: none).
   float tether_dx = 0, tether_dz = 0, tether_reach = 0;
+  // 1 when it will not move this step (AvoidanceJob::holds: a walker leaving or settling into its stance), else 0.
+  float holds = 0;
 };
 // A plan request competing for the step's planning budget: the most urgent first, ties by entity index.
 struct PlanCandidate {
@@ -73,9 +75,11 @@ struct CrowdAgents {
   AvoidanceParameters avoidance;
   SteeringParameters steering;
   AgentMoveParameters move;
-  // Avoidance keeps discs this much wider than the bodies: agents move with avoidance's velocity except while a
-  // walker leaves its idle stance (agent_move.h holds it still), and the margin absorbs that. 6 cm packed dense
-  // crowds so tight that far more of them stalled (crossing: 31 % through in 90 s against 55 % with 2 cm).
+  // Avoidance keeps discs this much wider than the bodies. 6 cm packed dense crowds so tight that far more of them
+  // stalled (crossing: 31 % through in 90 s against 55 % with 2 cm). A walker leaving or settling into its idle
+  // stance is held still (agent_move.h) and avoidance is told so (AvoidanceJob::holds): its neighbours avoid it
+  // wholly. Before, the margin alone absorbed those holds, and pairs pressed past it in some runs (3 in the
+  // crossing at 240 agents with the wish steered from its last direction).
   float radius_margin = 0.02f;
   // Avoidance keeps each agent within this share of kBodyLagMax (systems/locomotion.h, at the walker's scale) of
   // its body, which planted feet may hold back, whenever its half-planes leave a velocity that does (AvoidanceJob::
@@ -90,6 +94,7 @@ struct CrowdAgents {
   AvoidanceScratch scratch;
   std::vector<float> px, pz, vx, vz, pref_vx, pref_vz, radius, max_speed, new_vx, new_vz, tether_dx, tether_dz,
       tether_reach;
+  std::vector<std::uint8_t> holds;
   struct Row {
     std::uint32_t walker;  // entity index: the gather's order
     std::uint32_t table, row;

@@ -5,7 +5,8 @@
 // (facing_direction below; turning on the spot when nearly still). What makes the motion one a body can walk is
 // upstream: navigation's preferred velocity goes through followable_velocity below (turning, slowing while facing
 // away, acceleration and braking limits), and avoidance departs from it only to avoid someone. A walker standing
-// (kGaitIdle > 0, systems/locomotion.h) is held still until it has left its stance. Also keeps the bookkeeping
+// (kGaitIdle > 0, systems/locomotion.h) is held still until it has left its stance (avoidance knows it will be:
+// AvoidanceJob::holds, scene/crowd_agents.cpp). Also keeps the bookkeeping
 // `report crowd` reads: time travelling, and time since the agent last came nearer its goal along its path (stuck
 // detection).
 //

@@ -281,8 +281,15 @@ HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j,
   const AvoidanceParameters& prm = job.params;
   const vec2 pi(job.px[i], job.pz[i]), pj(job.px[j], job.pz[j]);
   const vec2 vi = first ? vec2(first->vx[i], first->vz[i]) : vec2(job.vx[i], job.vz[i]);
-  const vec2 vj = first ? vec2(first->vx[j], first->vz[j]) : vec2(job.vx[j], job.vz[j]);
-  const float share = first && first->infeasible[j] == 0 ? 1.0f : 0.5f;
+  vec2 vj = first ? vec2(first->vx[j], first->vz[j]) : vec2(job.vx[j], job.vz[j]);
+  float share = first && first->infeasible[j] == 0 ? 1.0f : 0.5f;
+  // A neighbour holding still this step takes no part: this agent avoids it wholly, where it stands. Counted on for
+  // half, it stayed put while this one moved as if it would not (the crossing: agents held still 19,359 agent-steps
+  // with an avoidance velocity over 5 cm/s; 3 pairs pressed 1-2 cm past the tolerance).
+  if (!job.holds.empty() && job.holds[j] != 0) {
+    vj = vec2(0.0f);
+    share = 1.0f;
+  }
   const vec2 rel_p = pj - pi;
   const vec2 rel_v = vi - vj;
   const float dist2 = length_squared(rel_p);
@@ -441,6 +448,10 @@ bool tether_plane(const AvoidanceJob& job, std::uint32_t i, HalfPlane& out) {
 template <class ForEachEdge>
 vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t neighbour_count,
                  const ForEachEdge& for_each_edge, const FirstPass* first, bool& infeasible) {
+  if (!job.holds.empty() && job.holds[i] != 0) {  // it stays where it is: its neighbours avoid it wholly
+    infeasible = false;
+    return vec2(0.0f);
+  }
   std::array<HalfPlane, kMaxPlanes> planes;
   std::array<HalfPlane, kMaxPlanes> projected;
   const std::size_t hard = obstacle_planes(job, i, for_each_edge, planes.data());
@@ -569,6 +580,7 @@ bool validate_job(const AvoidanceJob& job, bool need_scratch) {
     if (!(job.radius[i] > 0.0f && job.radius[i] <= kAvoidanceMaxRadius)) return false;
     if (!(job.max_speed[i] >= 0.0f && job.max_speed[i] <= kAvoidanceMaxSpeed)) return false;
   }
+  if (!job.holds.empty() && job.holds.size() != n) return false;
   if (!job.tether_reach.empty() || !job.tether_dx.empty() || !job.tether_dz.empty()) {
     if (job.tether_reach.size() != n || job.tether_dx.size() != n || job.tether_dz.size() != n) return false;
     for (const float* in : {job.tether_dx.data(), job.tether_dz.data(), job.tether_reach.data()})

@@ -131,6 +131,10 @@ struct AvoidanceJob {
   // agent to its walking body, which a planted foot may hold back (systems/locomotion.h GaitStyle::lag_dip): an
   // agent that ran on ahead of its feet would leave them dragging. tether_reach <= 0 means no tether.
   std::span<const float> tether_dx, tether_dz, tether_reach;
+  // Optional (empty, or length n): agents that will not move this step whatever avoidance answers (non-zero; a
+  // walker leaving or settling into its stance waits for its feet, systems/agent_move.h). Their neighbours avoid
+  // them wholly, as a still obstacle, instead of counting on them for half; their own answer is zero.
+  std::span<const std::uint8_t> holds;
   const ObstacleSet* obstacles = nullptr;  // may be null: no static obstacles
   AvoidanceParameters params;
   AvoidanceScratch* scratch = nullptr;

@@ -584,6 +584,34 @@ TEST(Avoidance, TetherHoldsAnAgentOnlyWhereAvoidanceAllows) {
   EXPECT_EQ(fast_z, crowd.new_vz);
 }
 
+// A neighbour that holds still (a walker waiting for its feet) is avoided wholly. Counted on for half, it stays put
+// while the other leaves it half the avoidance: a walker arriving at 1.3 m/s 2 cm from one that holds still ends the
+// step pressed into it.
+TEST(Avoidance, AnAgentHoldingStillIsAvoidedWholly) {
+  const float dt = 1.0f / 30.0f;
+  float gap_after[2] = {0.0f, 0.0f};
+  for (int told = 0; told < 2; ++told) {
+    AvoidanceScratch scratch;
+    Crowd c;
+    c.add({0.0f, 0.0f}, {0.0f, 0.0f});       // holds still
+    c.add({-0.62f, 0.05f}, {10.0f, 0.05f});  // arriving at walking pace
+    c.set_preferred();
+    c.vx[1] = 1.3f;
+    std::vector<std::uint8_t> holds{1, 0};
+    AvoidanceJob job = c.job(scratch);
+    job.params.dt = dt;
+    if (told == 1) job.holds = holds;
+    ASSERT_TRUE(job.run());
+    if (told == 1) EXPECT_EQ(glm::vec2(c.new_vx[0], c.new_vz[0]), glm::vec2(0.0f));
+    const vec2 p1 = c.position(1) + vec2(c.new_vx[1], c.new_vz[1]) * dt;  // the other does not move
+    gap_after[told] = std::hypot(p1.x, p1.y) - 0.6f;
+  }
+  std::printf("gap after one step to an agent holding still: %.4f m counted on for half, %.4f m avoided wholly\n",
+              gap_after[0], gap_after[1]);
+  EXPECT_GE(gap_after[1], -1e-4f);
+  EXPECT_LT(gap_after[0], gap_after[1]);
+}
+
 TEST(Avoidance, ValidateRefusesBadTethers) {
   AvoidanceScratch scratch;
   Crowd c = random_crowd(10, 5.0f, 1);
@@ -604,6 +632,10 @@ TEST(Avoidance, ValidateRefusesBadTethers) {
   reach[2] = std::numeric_limits<float>::infinity();
   EXPECT_FALSE(job.validate());
   reach[2] = 0.2f;
+  std::vector<std::uint8_t> holds(9, 0);
+  job.holds = holds;  // lengths differ
+  EXPECT_FALSE(job.validate());
+  job.holds = {};
   job.new_vx = std::span<float>(dx);  // output aliasing a tether input
   EXPECT_FALSE(job.validate());
 }
