@@ -525,26 +525,24 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
     track.position = glm::vec2(a.at(kAgentPx, i), a.at(kAgentPz, i)) + lag;
     track.heading = a.at(kAgentHeading, i);
     // The body moves with its velocity and turns to face where it wants to go (agent_move.h).
-    track.velocity = glm::vec2(a.at(kAgentVx, i), a.at(kAgentVz, i)) + catch_up;
+    const glm::vec2 agent_v(a.at(kAgentVx, i), a.at(kAgentVz, i)), wish(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i));
+    const glm::vec2 target(a.at(kAgentTargetX, i), a.at(kAgentTargetZ, i));
+    track.velocity = agent_v + catch_up;
     track.speed = glm::length(track.velocity);
     track.turn_rate = turn_rate_at(track.speed, style.turn_rate, style.turn_in_place_rate);
-    const glm::vec2 face = facing_direction(
-        {a.at(kAgentVx, i), a.at(kAgentVz, i)}, {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)},
-        {a.at(kAgentTargetX, i) - a.at(kAgentPx, i), a.at(kAgentTargetZ, i) - a.at(kAgentPz, i)},
-        style.face_velocity_speed, style.face_side_angle);
+    const glm::vec2 face = facing_direction(agent_v, wish, target - glm::vec2(a.at(kAgentPx, i), a.at(kAgentPz, i)),
+                                            style.face_velocity_speed, style.face_side_angle);
     if (face.x != 0.0f || face.y != 0.0f) track.turn = wrap_angle(std::atan2(face.x, face.y) - track.heading);
-    const glm::vec2 to_target = glm::vec2(a.at(kAgentTargetX, i), a.at(kAgentTargetZ, i)) - track.position;
+    const glm::vec2 to_target = target - track.position;
     // The course turns towards the steering target only while the agent goes where it wishes (navigation turns
     // the wish that way). Carried off its wish by avoidance, it is predicted straight on: predicted turning back
     // to a target avoidance kept it from, footprints landed on a curve the body never took, beside and ahead of
     // it (a walker carried across its wish at 1.1 m/s: 11 mm of slide, 0.08 mm predicted straight on).
-    const glm::vec2 agent_v(a.at(kAgentVx, i), a.at(kAgentVz, i)), wish(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i));
-    const bool steering =
-        glm::length(agent_v - wish) <= style.steering_tolerance * std::max(glm::length(wish), style.stand_speed);
+    const float wish_speed = glm::length(wish);
+    const bool steering = glm::length(agent_v - wish) <= style.steering_tolerance * std::max(wish_speed, style.stand_speed);
     if (steering && track.speed > 0.05f && glm::length(to_target) > 0.3f)
       track.course_turn = wrap_angle(std::atan2(to_target.x, to_target.y) - std::atan2(track.velocity.x, track.velocity.y));
-    if (std::hypot(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)) < style.stand_speed)
-      track.stop_distance = track.speed * track.speed / (2.0f * style.agent_braking);
+    if (wish_speed < style.stand_speed) track.stop_distance = track.speed * track.speed / (2.0f * style.agent_braking);
     g[kGaitCadenceTarget] = g[kGaitCadence] = agent_cadence(track.speed, g[kGaitHeight], style);
     const GaitParameters gp = current_gait(g);
     if (g[kGaitIdle] <= 0.0f) g[kGaitPhase] = frac(g[kGaitPhase] + hurry * dt / gp.cycle_time);
