@@ -49,13 +49,19 @@ nlohmann::json gait_cycle_json(const GaitCycle& c, const NormativeGait& normativ
                    {"shoulder_max_deg", f.shoulder_max_deg},
                    {"trunk_min_deg", f.trunk_min_deg},
                    {"trunk_max_deg", f.trunk_max_deg}};
-  const bool met = c.cycles > 0 && rms.knee <= t.rms_knee_hip_deg && rms.hip <= t.rms_knee_hip_deg &&
-                   rms.ankle <= t.rms_ankle_deg && f.heel_strike_knee_deg <= t.heel_strike_knee_max_deg &&
-                   f.swing_knee_peak_deg >= t.swing_peak_min_deg && f.swing_knee_peak_deg <= t.swing_peak_max_deg &&
-                   f.stance_knee_min_deg <= t.stance_knee_min_max_deg && f.hip_min_deg >= t.hip_min_deg &&
-                   f.hip_max_deg <= t.hip_max_deg && c.pelvis_vertical_excursion_cm >= t.excursion_min_cm &&
-                   c.pelvis_vertical_excursion_cm <= t.excursion_max_cm &&
-                   std::max(std::abs(f.trunk_min_deg), std::abs(f.trunk_max_deg)) <= t.trunk_abs_max_deg;
+  // The features (a gait lab's normative ranges) apply at every speed; the RMS is against one subject walking one
+  // speed (about 1.05 m/s on this leg), so a class's features_met is reported beside its targets_met.
+  const bool features_met = c.cycles > 0 && f.heel_strike_knee_deg <= t.heel_strike_knee_max_deg &&
+                             f.swing_knee_peak_deg >= t.swing_peak_min_deg &&
+                             f.swing_knee_peak_deg <= t.swing_peak_max_deg &&
+                             f.stance_knee_min_deg <= t.stance_knee_min_max_deg &&
+                             f.hip_min_deg >= t.hip_min_deg && f.hip_max_deg <= t.hip_max_deg &&
+                             c.pelvis_vertical_excursion_cm >= t.excursion_min_cm &&
+                             c.pelvis_vertical_excursion_cm <= t.excursion_max_cm &&
+                             std::max(std::abs(f.trunk_min_deg), std::abs(f.trunk_max_deg)) <= t.trunk_abs_max_deg;
+  const bool met = features_met && rms.knee <= t.rms_knee_hip_deg && rms.hip <= t.rms_knee_hip_deg &&
+                   rms.ankle <= t.rms_ankle_deg;
+  j["features_met"] = features_met;
   j["targets_met"] = met;
   return j;
 }

@@ -623,6 +623,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
   walk_style.pelvis_yaw += base_style.yaw_long_step_rise * longer;
   walk_style.pelvis_tilt += base_style.tilt_long_step_rise * longer;
   walk_style.toe_off_pitch += base_style.toe_off_long_step_rise * longer;
+  walk_style.bob_curvature *= std::max(1.0f - base_style.bob_long_step_drop * longer, 0.3f);
   const GaitStyle& style = walk_style;
   const GaitParameters& gp = clock.gp;
   GroundTrack track = clock.track;  // agents: moved with the pelvis below

@@ -80,7 +80,13 @@ struct GaitStyle {
   // search of 2026-11-27: a coordinate search of the numbers marked so here against the gait-cycle targets of
   // the default walker and every walker class (docs/motion.md); with the longer lead the pelvis has to follow
   // the double-support dip closer.
-  float bob_curvature = 4.0f;  // 4.0 from the fast walk's search (below, yaw_long_step_rise)
+  // 4.0 from the fast walk's search (below, yaw_long_step_rise); 4.5 from the pre-swing search (heel_off).
+  float bob_curvature = 4.5f;
+  // The curvature falls by this fraction per reference step a long fast step runs beyond 1.05 of it (below,
+  // yaw_long_step_rise): with the later heel rise (heel_off 0.65) the tallest walker at 1.8 m/s bobbed 5.2-5.3 cm
+  // (target <= 5) at 4-4.5; a lower yaw/tilt/lead for that walker alone pushed its trailing hip past -25 deg.
+  // 2.0 halves it at the longest steps (4.9 cm); the default walker (no excess) keeps the whole curvature.
+  float bob_long_step_drop = 2.0f;
   // Footprint placed this many step lengths ahead of the pelvis at heel strike. With the heel rise below it
   // balances the leading leg at heel strike against the trailing one at toe-off: measured pelvis bob peak to
   // peak 2.2 / 5.9 / 10.7 cm at 0.8 / 1.2 / 1.6 m/s (0.5 gave 10 cm and 0.65 gave 7.8 cm at 1.2 m/s).
@@ -90,13 +96,16 @@ struct GaitStyle {
   // `lead` ahead, and the default rest ankle is 7 cm behind the hip, so 0.53 left every foot 6-8 cm further back
   // under the hip than the subject's through the whole cycle (heel strike 0.26 m ahead of the hip, the subject's
   // 0.33).
-  float footprint_lead = 0.58f;
+  // 0.6 from the pre-swing search of 2026-11-28 (heel_off below): the foot 1.4 cm further forward under the hip
+  // through stance, so the trailing hip extends as far as the subject's by toe-off without the foot rolling early.
+  float footprint_lead = 0.6f;
   // The lead's fraction of the step falls by this much per step length beyond 0.7 m at rig scale, and rises by
   // lead_short_step_rise per step length below it: fast walkers' long steps dipped the pelvis 7 cm and bent their
   // terminal-stance knee 11-16 deg at 0.58; a slow walker's short step landed bent-kneed at the same lead.
   // 0.14 and 0.3 from the fast walk's search (0.1 and 0.35 before).
-  float lead_long_step_drop = 0.14f;
-  float lead_short_step_rise = 0.3f;
+  // 0.18 and 0.2 since the pre-swing search (the fast and slow walkers' leads about where they were).
+  float lead_long_step_drop = 0.18f;
+  float lead_short_step_rise = 0.2f;
   // The fast walk: per reference step (0.7 m at rig scale) by which a step runs beyond 1.05 of it (0 for the
   // default walker at 1.2 m/s, 0.17-0.24 at 1.8 m/s), the pelvis turns (yaw) and lists (tilt) further, the foot
   // leaves the ground further rolled onto its toes (toe_off_pitch), and the swing's knots rise that fraction less
@@ -109,15 +118,19 @@ struct GaitStyle {
   // joint search's numbers (2026-11-27, second round), scored by every walker class's features and
   // the default walker's RMS.
   float yaw_long_step_rise = 0.6f;
-  float tilt_long_step_rise = 0.1f;
-  float toe_off_long_step_rise = 1.1f;
+  float tilt_long_step_rise = 0.14f;     // 0.1 before the pre-swing search
+  float toe_off_long_step_rise = 1.3f;   // 1.1 before it
   float lift_long_step_drop = 0.8f;
   // Fraction of stance at which the heel starts to rise at the latest (~38 % of the cycle); it rises sooner when
   // the body's progress needs it (heel_hold_from). 0.6 from the joint search (was 0.59). On the old 0.53 lead,
   // 0.55 carried the trailing hip less far back (hip minimum -26.2 -> -23.7 deg) and 0.7 followed the subject's
   // pre-swing knee exactly (knee RMS 5.8) but left the hip at -28.8: the foot stayed where the rest ankle's 7 cm
   // behind the hip put every footprint.
-  float heel_off = 0.6f;
+  // 0.65 since the pre-swing search (2026-11-28), with the longer lead: the subject's heel rises slowly to ~7 deg by
+  // the other foot's heel strike (48 % of the cycle) and then fast (52 deg at 64 %), where 0.6 had the foot pitched
+  // 15 deg by 48 % and the ankle plantarflexing from 46 % (13 deg short of the subject's at 54-60 %); the knee then
+  // bent early too. Ankle RMS 5.5 -> 4.9, knee 5.9 -> 5.7, hip 3.6 -> 3.3 deg (docs/motion.md).
+  float heel_off = 0.65f;
   // From this fraction of stance (~28 % of the cycle) the heel rises as soon and as fast as the hip moving on ahead
   // needs to keep the stance knee at the subject's angle (systems/locomotion.cpp stance_pose), for the pelvis
   // as placed; the look-ahead assumes the pelvis heel_hold_height above rest. A schedule alone (heel_off and the

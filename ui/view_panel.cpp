@@ -189,7 +189,7 @@ void gait_section(Crowd& scene, UiProbe* probe) {
   ImGui::SliderFloat("footprint lead", &g.footprint_lead, 0.3f, 0.9f, "%.2f steps");
   ImGui::SliderFloat("lead drop, long step", &g.lead_long_step_drop, 0.0f, 0.5f, "%.2f");
   ImGui::SliderFloat("lead rise, short step", &g.lead_short_step_rise, 0.0f, 0.8f, "%.2f");
-  ImGui::SliderFloat("heel off", &g.heel_off, 0.1f, 0.7f, "%.2f of stance");
+  ImGui::SliderFloat("heel off", &g.heel_off, 0.1f, 0.9f, "%.2f of stance");
   ImGui::SliderFloat("heel hold from", &g.heel_hold_from, 0.2f, 1.0f, "%.2f of stance");  // 1: the schedule alone
   ImGui::SliderFloat("toe-off pitch", &g.toe_off_pitch, 0.0f, 1.3f, "%.2f rad");
   ImGui::SliderFloat("swing clearance", &g.swing_clearance, 0.0f, 0.15f, "%.3f m");
@@ -200,6 +200,7 @@ void gait_section(Crowd& scene, UiProbe* probe) {
   ImGui::SliderFloat("fast: more pelvis list", &g.tilt_long_step_rise, 0.0f, 0.5f, "%.2f");
   ImGui::SliderFloat("fast: more toe-off pitch", &g.toe_off_long_step_rise, 0.0f, 2.5f, "%.2f");
   ImGui::SliderFloat("fast: lower swing", &g.lift_long_step_drop, 0.0f, 1.6f, "%.2f");
+  ImGui::SliderFloat("fast: softer bob", &g.bob_long_step_drop, 0.0f, 3.5f, "%.2f");
   ImGui::SliderFloat("arm swing", &g.arm_swing, 0.0f, 0.4f, "%.3f m");
   note(probe, "arm swing");
   if (ImGui::Button("Default gait")) g = GaitStyle{};

@@ -563,6 +563,18 @@ TEST(StrataReport, GaitWritesTheMeasuredTargets) {
   EXPECT_EQ(j.at("nan_count"), 0);
   EXPECT_LT(j.at("stride_length_error_pct").get<double>(), 2.0);
   EXPECT_GT(j.at("strides").get<int>(), 10);
+  // Issue 21's targets: the default walker meets all of them (RMS against the subject included), and every walker
+  // class the crowds spawn keeps its features in the normative ranges; a class's targets_met (its RMS against the
+  // one subject too) is never true where its features are not.
+  const nlohmann::json& cycle = j.at("gait_cycle");
+  EXPECT_TRUE(cycle.at("targets_met").get<bool>()) << cycle.at("normative_rms_deg").dump();
+  EXPECT_LE(cycle.at("normative_rms_deg").at("ankle").get<double>(), 5.0);
+  ASSERT_EQ(j.at("gait_cycle_classes").size(), 6u);
+  for (const nlohmann::json& c : j.at("gait_cycle_classes")) {
+    EXPECT_TRUE(c.at("features_met").get<bool>()) << c.at("features").dump();
+    if (c.at("targets_met").get<bool>()) EXPECT_TRUE(c.at("features_met").get<bool>());
+  }
+  EXPECT_NE(r.out.find("deg: ok; classes' features ok"), std::string::npos) << r.out;
 }
 
 TEST(StrataCrowd, SameSeedSameStateWhateverTheThreadCount) {

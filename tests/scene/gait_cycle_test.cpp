@@ -134,7 +134,9 @@ TEST(GaitCycle, TheFastWalkShapesChangeOnlyLongSteps) {
 // The swing follows the normative swing about the real hip between its catch-up and its landing
 // (GaitStyle::swing_catch_up): spread evenly over the swing, the foot's misfits at toe-off and at heel strike held
 // it behind the normative path through mid-swing, the thigh 2-4 deg behind the subject's from 70 to 80 % of the
-// cycle. (Late swing is bound by the toe's ground clearance, with or without.)
+// cycle. (Late swing is bound by the toe's ground clearance, with or without.) Since the footprint lead went to 0.6
+// (2026-11-28) the landing misfit is smaller and so is the gain: 2.42 against 3.07 deg
+// (the bound was 0.75 before).
 TEST(GaitCycle, TheSwingThighFollowsTheSubjectWithTheCatchUp) {
   auto mid_swing_hip_rms = [](const GaitCycle& c) {
     const NormativeGait& n = shipped_normative_gait();
@@ -151,7 +153,7 @@ TEST(GaitCycle, TheSwingThighFollowsTheSubjectWithTheCatchUp) {
   const double with = mid_swing_hip_rms(measure_gait_cycle(default_rig(), GaitStyle{}, {}));
   const double without = mid_swing_hip_rms(measure_gait_cycle(default_rig(), spread, {}));
   std::printf("mid-swing hip RMS %.2f with, %.2f without\n", with, without);
-  EXPECT_LT(with, 0.75 * without) << "with " << with << " deg, spread evenly " << without << " deg";
+  EXPECT_LT(with, 0.85 * without) << "with " << with << " deg, spread evenly " << without << " deg";
 }
 
 // The stance knee angles the pelvis and the heel rise hold (systems/locomotion.h kStanceKneeDeg) are the shipped
