@@ -572,7 +572,9 @@ TEST(StrataReport, GaitWritesTheMeasuredTargets) {
   ASSERT_EQ(j.at("gait_cycle_classes").size(), 6u);
   for (const nlohmann::json& c : j.at("gait_cycle_classes")) {
     EXPECT_TRUE(c.at("features_met").get<bool>()) << c.at("features").dump();
-    if (c.at("targets_met").get<bool>()) EXPECT_TRUE(c.at("features_met").get<bool>());
+    if (c.at("targets_met").get<bool>()) {
+      EXPECT_TRUE(c.at("features_met").get<bool>());
+    }
   }
   EXPECT_NE(r.out.find("deg: ok; classes' features ok"), std::string::npos) << r.out;
 }

@@ -360,9 +360,12 @@ TEST(Avoidance, JobEqualsBruteForceReference) {
   Crowd c = random_crowd(800, 40.0f, 7);  // dense (2 m^2 each), overlaps included, so both passes run
   const ObstacleSet obstacles = some_boxes();
   for (const bool second_pass : {true, false}) {
+    for (const float right_of_way : {0.0f, 0.49f}) {
+    SCOPED_TRACE(right_of_way);
     AvoidanceScratch scratch;
     AvoidanceJob job = c.job(scratch, &obstacles);
     job.params.second_pass = second_pass;
+    job.params.right_of_way = right_of_way;
     ASSERT_TRUE(job.run());
     const std::vector<float> fast_x = c.new_vx, fast_z = c.new_vz;
     std::fill(c.new_vx.begin(), c.new_vx.end(), -99.0f);
@@ -374,6 +377,54 @@ TEST(Avoidance, JobEqualsBruteForceReference) {
       EXPECT_LE(speed, c.max_speed[i] * (1.0f + 1e-5f));
     }
     EXPECT_EQ(differing, 0) << "second pass " << second_pass;
+    }
+  }
+}
+
+// Right of way (AvoidanceParameters::right_of_way): a walker catching up with a slower one on the same way passes
+// it; with halves the one in front swerves as much as the one behind, with right of way it keeps its line and the
+// one behind does the avoiding. Side by side or head on, the shares stay halves, bit for bit.
+TEST(Avoidance, TheOneAheadKeepsItsLineTheOneBehindYields) {
+  const float dt = 1.0f / 30.0f;
+  auto one_step = [&](float right_of_way, vec2 p0, vec2 g0, vec2 v0, vec2 p1, vec2 g1, vec2 v1) {
+    AvoidanceScratch scratch;
+    Crowd c;
+    c.add(p0, g0);
+    c.add(p1, g1);
+    c.set_preferred();
+    c.vx = {v0.x, v1.x};  // each moving as it wants to: preferred = current velocity
+    c.vz = {v0.y, v1.y};
+    c.pref_vx = c.vx;
+    c.pref_vz = c.vz;
+    AvoidanceJob job = c.job(scratch);
+    job.params.dt = dt;
+    job.params.right_of_way = right_of_way;
+    EXPECT_TRUE(job.run());
+    return std::pair<Crowd, AvoidanceJob>{c, job};
+  };
+  // In front at 0.7 m/s, the one behind 0.9 m back at 1.4 m/s: both want to go on along +x.
+  const vec2 front(0.0f, 0.0f), behind(-0.9f, 0.03f), far(30.0f, 0.0f);
+  float front_swerve[2], behind_swerve[2];
+  for (int k = 0; k < 2; ++k) {
+    auto [c, job] = one_step(k == 0 ? 0.0f : 0.49f, front, far, {0.7f, 0.0f}, behind, far + vec2(0.0f, 0.03f),
+                             {1.4f, 0.0f});
+    front_swerve[k] = std::hypot(c.new_vx[0] - 0.7f, c.new_vz[0]);
+    behind_swerve[k] = std::hypot(c.new_vx[1] - 1.4f, c.new_vz[1] - 0.0f);
+  }
+  std::printf("swerve of the one in front %.3f -> %.3f m/s, of the one behind %.3f -> %.3f m/s\n", front_swerve[0],
+              front_swerve[1], behind_swerve[0], behind_swerve[1]);
+  EXPECT_GT(front_swerve[0], 0.05f) << "with halves the one in front takes part";
+  EXPECT_LT(front_swerve[1], 0.1f * front_swerve[0]);
+  EXPECT_GT(behind_swerve[1], behind_swerve[0]);
+  // Side by side (neither ahead) and head on (opposite ways): the same answer as with halves.
+  for (const bool head_on : {false, true}) {
+    const vec2 a(0.0f, -0.35f), b = head_on ? vec2(3.0f, 0.35f) : vec2(0.0f, 0.35f);
+    const vec2 ga = a + vec2(20.0f, 1.0f), gb = head_on ? b + vec2(-20.0f, -1.0f) : b + vec2(20.0f, -1.0f);
+    const vec2 va(1.2f, 0.05f), vb = head_on ? vec2(-1.2f, -0.05f) : vec2(1.2f, -0.05f);
+    auto [halves, j0] = one_step(0.0f, a, ga, va, b, gb, vb);
+    auto [shifted, j1] = one_step(0.49f, a, ga, va, b, gb, vb);
+    EXPECT_EQ(halves.new_vx, shifted.new_vx) << "head on " << head_on;
+    EXPECT_EQ(halves.new_vz, shifted.new_vz) << "head on " << head_on;
   }
 }
 
@@ -503,6 +554,11 @@ TEST(Avoidance, ValidateRefusesBadInputAndWritesNothing) {
     job = c.job(scratch);
     job.params.max_neighbors = strata::kAvoidanceMaxNeighbors + 1;
     refused_untouched(c, job);
+    for (const float right_of_way : {-0.1f, 0.6f, std::numeric_limits<float>::quiet_NaN()}) {
+      job = c.job(scratch);
+      job.params.right_of_way = right_of_way;  // outside 0..0.5: a share would turn negative
+      refused_untouched(c, job);
+    }
   }
   {
     Crowd c = random_crowd(10, 5.0f, 1);
@@ -602,7 +658,9 @@ TEST(Avoidance, AnAgentHoldingStillIsAvoidedWholly) {
     job.params.dt = dt;
     if (told == 1) job.holds = holds;
     ASSERT_TRUE(job.run());
-    if (told == 1) EXPECT_EQ(glm::vec2(c.new_vx[0], c.new_vz[0]), glm::vec2(0.0f));
+    if (told == 1) {
+      EXPECT_EQ(glm::vec2(c.new_vx[0], c.new_vz[0]), glm::vec2(0.0f));
+    }
     const vec2 p1 = c.position(1) + vec2(c.new_vx[1], c.new_vz[1]) * dt;  // the other does not move
     gap_after[told] = std::hypot(p1.x, p1.y) - 0.6f;
   }
