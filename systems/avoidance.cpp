@@ -276,7 +276,10 @@ float right_of_way_shift(const AvoidanceJob& job, std::uint32_t i, std::uint32_t
   const float li = length_squared(ai), lj = length_squared(aj);
   constexpr float kMinPreferred2 = 1e-4f;  // (1 cm/s)^2: an agent that wants to stand has no way to lead on
   constexpr float kCosSameWay = 0.5f;      // 60 deg
-  if (!(li > kMinPreferred2 && lj > kMinPreferred2) || dot2(ai, aj) <= kCosSameWay * std::sqrt(li * lj)) return 0.0f;
+  const float along = dot2(ai, aj);  // within 60 deg: along > 0 and along^2 > cos^2 li lj (no square root)
+  if (!(li > kMinPreferred2 && lj > kMinPreferred2) || along <= 0.0f ||
+      along * along <= kCosSameWay * kCosSameWay * li * lj)
+    return 0.0f;
   const vec2 way = ai + aj;
   const float way_length = std::sqrt(length_squared(way));  // > 0: the two are within 60 deg
   const vec2 rel_p(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
