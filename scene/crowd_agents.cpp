@@ -11,6 +11,7 @@
 #include "scene/body_settings.h"
 #include "scene/crowd.h"
 #include "scene/spawn.h"
+#include "systems/agent_move.h"
 #include "systems/animation_sample.h"
 #include "systems/job.h"
 #include "systems/locomotion.h"
@@ -223,7 +224,7 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
     a.mine[k] = {a.rows[k].walker, f(kAgentPx), f(kAgentPz), f(kAgentVx), f(kAgentVz), f(kAgentPrefVx),
                  f(kAgentPrefVz), f(kAgentRadius) + a.radius_margin, 1.25f * f(kAgentPrefSpeed),
                  t.f32(kWalkerGait, kGaitLagX)[r], t.f32(kWalkerGait, kGaitLagZ)[r],
-                 a.tether_share * kBodyLagMax * scale, t.f32(kWalkerGait, kGaitIdle)[r] > 0.0f ? 1.0f : 0.0f};
+                 a.tether_share * kBodyLagMax * scale, agent_held_still(t.f32(kWalkerGait, kGaitIdle)[r]) ? 1.0f : 0.0f};
   }
   // Spread over processes: the other processes' agents near this one's join in entity order (merged with this
   // process's, which win a tie: a walker nobody owns is kept by every process), so each of this process's agents

@@ -18,7 +18,7 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
   const AgentMoveParameters& p = job.params;
   float vx = a.at(kAgentOrcaVx, i), vz = a.at(kAgentOrcaVz, i);
   // Leaving (or settling into) the idle stance: the feet are down side by side and the body waits for them.
-  if (job.gait.at(kGaitIdle, i) > 0.0f) vx = vz = 0.0f;
+  if (agent_held_still(job.gait.at(kGaitIdle, i))) vx = vz = 0.0f;
   const float speed = std::hypot(vx, vz);
   const glm::vec2 face = facing_direction({vx, vz}, {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)},
                                           {a.at(kAgentTargetX, i) - a.at(kAgentPx, i), a.at(kAgentTargetZ, i) - a.at(kAgentPz, i)},

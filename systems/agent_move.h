@@ -40,6 +40,11 @@ inline float turn_rate_at(float speed, float walking, float in_place) {
   return in_place + (walking - in_place) * u;
 }
 
+// Whether agent_move holds an agent still this step whatever avoidance answers: its walker is leaving or settling
+// into its idle stance (kGaitIdle > 0), its feet down side by side. The avoidance gather tells ORCA the same
+// (AvoidanceJob::holds, scene/crowd_agents.cpp), so both read this one rule.
+inline bool agent_held_still(float gait_idle) { return gait_idle > 0.0f; }
+
 // Where a walking body faces: where it wants to go (`preferred`), or, carried by avoidance at a walking pace
 // within `side_angle` of the way to its steering target (`to_target`; the preferred velocity when that is zero),
 // where it goes. Pushed aside or back it steps that way without turning round: facing its velocity whatever it was
