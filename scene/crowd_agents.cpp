@@ -116,6 +116,7 @@ void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& s
   crowd.widen_for_agents();
   auto agents = std::make_unique<CrowdAgents>();
   agents->scenario = scenario;
+  agents->steering = setup.steering;
   for (const SpawnGroup& g : scenario.groups) agents->goals.push_back(g.goal);
   if (agents->goals.empty()) throw std::invalid_argument("scenario '" + scenario.name + "' has no spawn group");
   const auto start = std::chrono::steady_clock::now();
@@ -150,7 +151,8 @@ void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& s
       auto seed = static_cast<std::uint32_t>(rng() >> 32);
       std::uint32_t waypoint = 0;
       std::uint32_t goal_rng = seed | 1u;
-      const glm::vec2 goal = first_goal(g.goal, at, scenario.ground_min, scenario.ground_max, goal_rng, waypoint);
+      const glm::vec2 goal = first_goal(g.goal, at, scenario.ground_min, scenario.ground_max, goal_rng, waypoint,
+                                        a.steering.entrance_margin);
       const float height = std::clamp(p.height_mean + p.height_sd * normal(rng), p.height_mean - 3.0f * p.height_sd,
                                       p.height_mean + 3.0f * p.height_sd);
       const float speed = std::clamp(p.speed_mean + p.speed_sd * normal(rng), p.speed_min, p.speed_max);

@@ -116,6 +116,7 @@ struct CrowdAgents {
 struct ScenarioSetup {
   bool use_cache = true;  // navigation mesh cache on disk
   std::size_t agents = 0; // 0: the scenario's counts; otherwise every group scaled so the total is about this
+  SteeringParameters steering;  // the agents' steering (CrowdAgents::steering); read at spawn too (entrance_margin)
 };
 
 // Makes `crowd` (which must have no walkers yet) the scenario's: builds the navigation mesh and the obstacles, and spawns every group's agents

@@ -77,8 +77,14 @@ void steer_one(const SteerJob& job, std::size_t i) {
   //    region is that large). Settling there (below) walled the entrance off: in the bottleneck the first agents
   //    in stood along the region's near edge, everyone behind pressed against them for the rest of the run and the
   //    region's far side stayed empty.
+  //  - Only near the region while outside it: a queue far from it (the bottleneck's room) makes no headway for
+  //    long spells, and redrawing there threw away the point the agent was given for its place in the arrival
+  //    order (region_fill_point).
+  const float outside = spec.kind == GoalKind::Region
+                            ? glm::length(glm::clamp(pos, spec.region_min, spec.region_max) - pos)
+                            : 0.0f;
   const bool redraw = spec.kind == GoalKind::Region && job.params.settle_after > 0.0f &&
-                      (!arrived || depth < job.params.settle_depth);
+                      (arrived ? depth < job.params.settle_depth : outside <= job.params.settle_depth);
   if (redraw) {
     if (since > job.params.settle_after &&
         std::floor(since / job.params.settle_after) != std::floor((since - job.dt) / job.params.settle_after)) {
@@ -87,6 +93,7 @@ void steer_one(const SteerJob& job, std::size_t i) {
                   : glm::vec2(0.0f);
       std::uint32_t& rng = job.state.at(kAgentSeed, i);
       goal = random_in(spec.region_min + inset, spec.region_max - inset, rng);
+      if (!arrived) goal = region_point_past_entrance(spec, goal, pos, job.params.entrance_margin);
       a.at(kAgentGoalX, i) = goal.x;
       a.at(kAgentGoalZ, i) = goal.y;
       a.at(kAgentBestDistance, i) = glm::length(goal - pos);
@@ -179,13 +186,27 @@ bool agent_views_fit(const ColumnView<float>& agent, const ColumnView<std::uint3
 
 }  // namespace
 
+glm::vec2 region_point_past_entrance(const ScenarioGoal& goal, glm::vec2 drawn, glm::vec2 from, float entrance_margin) {
+  if (goal.kind != GoalKind::Region || !(entrance_margin > 0.0f)) return drawn;
+  const glm::vec2 way = 0.5f * (goal.region_min + goal.region_max) - from;
+  const int axis = std::abs(way.x) >= std::abs(way.y) ? 0 : 1;
+  const float lo = goal.region_min[axis], hi = goal.region_max[axis], extent = hi - lo;
+  if (!(extent > 2.0f * entrance_margin)) return drawn;
+  const float within = std::clamp((drawn[axis] - lo) / extent, 0.0f, 1.0f);
+  const float usable = extent - entrance_margin;
+  glm::vec2 out = drawn;
+  out[axis] = way[axis] >= 0.0f ? hi - (1.0f - within) * usable : lo + within * usable;
+  return out;
+}
+
 glm::vec2 first_goal(const ScenarioGoal& goal, glm::vec2 spawn, glm::vec2 ground_min, glm::vec2 ground_max,
-                     std::uint32_t& rng, std::uint32_t& waypoint) {
+                     std::uint32_t& rng, std::uint32_t& waypoint, float entrance_margin) {
   waypoint = 0;
   switch (goal.kind) {
     case GoalKind::Point: return goal.points.empty() ? spawn : goal.points[0];
     case GoalKind::Opposite: return goal.points.empty() ? -spawn : 2.0f * goal.points[0] - spawn;
-    case GoalKind::Region: return random_in(goal.region_min, goal.region_max, rng);
+    case GoalKind::Region:
+      return region_point_past_entrance(goal, random_in(goal.region_min, goal.region_max, rng), spawn, entrance_margin);
     case GoalKind::Random: return random_ground_point(ground_min, ground_max, rng);
     case GoalKind::Waypoints: {
       float best = 1e30f;
