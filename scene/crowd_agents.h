@@ -75,7 +75,7 @@ struct CrowdAgents {
   // The one ahead on a shared way keeps going, the one behind yields (AvoidanceParameters::right_of_way): over
   // seven bottleneck runs 87 -> 92 % in the goal region after 240 s on average, every crossing agent in with fewer
   // waiting; the plaza's random goals, ~8 more agents stuck (docs/crowds.md).
-  AvoidanceParameters avoidance{.right_of_way = 0.49f};
+  AvoidanceParameters avoidance{.right_of_way = 0.49f, .make_way = true};
   SteeringParameters steering;
   AgentMoveParameters move;
   // Avoidance keeps discs this much wider than the bodies. 6 cm packed dense crowds so tight that far more of them

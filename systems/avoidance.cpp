@@ -468,13 +468,43 @@ bool tether_plane(const AvoidanceJob& job, std::uint32_t i, HalfPlane& out) {
   return true;
 }
 
+// AvoidanceParameters::make_way for held agent i: the unit direction off the way of the nearest walking
+// neighbour blocked against it, or 0. Reads the neighbours' current and preferred velocities only (this step's
+// inputs), so it is the same in the parallel job, the scalar twin and across processes.
+vec2 make_way_direction(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t count) {
+  constexpr float kPressGap = 0.15f;        // m between the bodies
+  constexpr float kMinWish2 = 0.3f * 0.3f;  // (m/s)^2: a neighbour that wants to walk
+  for (std::uint32_t k = 0; k < count; ++k) {
+    const std::uint32_t j = neighbours[k].index();
+    if (!job.holds.empty() && job.holds[j] != 0) continue;
+    const vec2 d(job.px[i] - job.px[j], job.pz[i] - job.pz[j]);
+    const float reach = job.radius[i] + job.radius[j] + kPressGap;
+    const float dist2 = length_squared(d);
+    if (!(dist2 < reach * reach)) continue;
+    const vec2 wish(job.pref_vx[j], job.pref_vz[j]);
+    const float wish2 = length_squared(wish);
+    if (!(wish2 > kMinWish2)) continue;
+    const vec2 v(job.vx[j], job.vz[j]);
+    if (!(length_squared(v) < 0.25f * wish2)) continue;  // moving at half its wish or more: not blocked
+    const float toward = dot2(wish, d);                  // within 60 deg: toward > 0, toward^2 > 0.25 wish2 dist2
+    if (!(toward > 0.0f && toward * toward > 0.25f * wish2 * dist2)) continue;
+    const float wish_length = std::sqrt(wish2);
+    const vec2 across(-wish.y / wish_length, wish.x / wish_length);
+    const float side = dot2(d, across);
+    // Straight ahead of it (within a millimetre): a side by index, the same whatever the thread count.
+    const float sign = std::abs(side) > 1e-3f ? (side > 0.0f ? 1.0f : -1.0f) : (i < j ? 1.0f : -1.0f);
+    return sign * across;
+  }
+  return vec2(0.0f);
+}
+
 // Agent i's new velocity from its chosen neighbours (sorted) and obstacle edges.
 template <class ForEachEdge>
 vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t neighbour_count,
                  const ForEachEdge& for_each_edge, const FirstPass* first, bool& infeasible) {
   if (!job.holds.empty() && job.holds[i] != 0) {  // it stays where it is: its neighbours avoid it wholly
     infeasible = false;
-    return vec2(0.0f);
+    return job.params.make_way ? make_way_direction(job, i, neighbours, neighbour_count) : vec2(0.0f);
   }
   std::array<HalfPlane, kMaxPlanes> planes;
   std::array<HalfPlane, kMaxPlanes> projected;

@@ -52,6 +52,14 @@ struct AvoidanceParameters {
   // follow the one in front; with halves the front agents at a door's mouth hesitated as much as those behind
   // (the bottleneck's door passed ~0.5 agents a second, its queue standing still for 20-30 s at a time).
   float right_of_way = 0.0f;
+  // Making way: an agent held still (AvoidanceJob::holds: standing at its goal) that a walking neighbour presses
+  // against, blocked (moving at under half its preferred speed, wishing within 60 deg of straight at it, closer
+  // than 15 cm gap), gets as its velocity the unit direction off that neighbour's way (across its wish, on the
+  // side it already stands; the nearest such neighbour), else 0. The avoidance never moves a held agent itself:
+  // navigation reads the direction and moves the agent's standing spot (SteeringParameters::make_way_step). Off:
+  // held agents get 0, the paper's static obstacle; standing bodies then never step aside, and a crowd arriving
+  // among them walls itself out (the bottleneck's last agents pressed for minutes against those who had stopped).
+  bool make_way = false;
 };
 
 // Static obstacles: solid, non-walkable polygons on the ground, kept as directed edges with a grid for the edges

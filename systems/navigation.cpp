@@ -124,12 +124,26 @@ void steer_one(const SteerJob& job, std::size_t i) {
       ++job.state.at(kAgentWaypoint, i);
       set_goal(job, i, goal);
     } else {
-      // A final goal: stand (the walk brings the feet together).
-      a.at(kAgentPrefVx, i) = 0.0f;
-      a.at(kAgentPrefVz, i) = 0.0f;
-      a.at(kAgentTargetX, i) = goal.x;
-      a.at(kAgentTargetZ, i) = goal.y;
-      return;
+      const glm::vec2 aside(a.at(kAgentOrcaVx, i), a.at(kAgentOrcaVz, i));
+      if (!(job.params.make_way_step > 0.0f && glm::dot(aside, aside) > 0.25f)) {
+        // A final goal: stand (the walk brings the feet together).
+        a.at(kAgentPrefVx, i) = 0.0f;
+        a.at(kAgentPrefVz, i) = 0.0f;
+        a.at(kAgentTargetX, i) = goal.x;
+        a.at(kAgentTargetZ, i) = goal.y;
+        return;
+      }
+      // Someone walking is blocked against it: its standing spot moves aside (SteeringParameters::make_way_step),
+      // at least a goal radius and a half, so it walks there rather than counting itself arrived where it is.
+      const float step = std::max(job.params.make_way_step, 1.5f * a.at(kAgentGoalRadius, i));
+      goal = pos + step * glm::normalize(aside);
+      a.at(kAgentGoalX, i) = goal.x;
+      a.at(kAgentGoalZ, i) = goal.y;
+      a.at(kAgentBestDistance, i) = step;
+      a.at(kAgentSinceProgress, i) = 0.0f;
+      c.at(0, i) = goal.x;
+      c.at(1, i) = goal.y;
+      c.at(kAgentCorners * 2, i) = 1.0f;
     }
   }
 

@@ -47,6 +47,10 @@ struct SteeringParameters {
   // crossing: runs with every agent in): 0 m 91.8 % / 7 of 7, 1 m 98.9 % / 7, 1.5 m 98.4 % / 7, 2 m (crossing only)
   // 3 of 7: a crossing agent carried by the other group's stream into that group's denser region stays there.
   float entrance_margin = 1.0f; // m
+  // An agent standing at its final goal whose avoidance answer is a direction to make way (AvoidanceParameters::
+  // make_way; at least half a unit long) moves its standing spot this far that way, walks there and stands again.
+  // 0: it stands where it is, whoever presses.
+  float make_way_step = 0.8f;   // m
 };
 
 struct SteerJob {

@@ -669,6 +669,50 @@ TEST(Avoidance, AnAgentHoldingStillIsAvoidedWholly) {
   EXPECT_LT(gap_after[0], gap_after[1]);
 }
 
+// Making way (AvoidanceParameters::make_way): an agent holding still that a blocked walker presses against is told
+// the way off that walker's line, on the side it already stands; one nobody presses, or pressed by a walker that
+// still moves, wishes elsewhere or is itself held, is told 0. The job and the scalar twin agree bit for bit.
+TEST(Avoidance, AHeldAgentPressedByABlockedWalkerIsToldWhereToStepAside) {
+  struct Case {
+    const char* what;
+    vec2 walker, walker_velocity, walker_wish;
+    bool walker_held;
+    vec2 expected;  // for the held agent at the origin
+  };
+  const Case cases[] = {
+      {"blocked from the west, the held one a little north of its line", {-0.65f, -0.05f}, {0.0f, 0.0f},
+       {1.3f, 0.0f}, false, {0.0f, 1.0f}},
+      {"blocked from the west, a little south", {-0.65f, 0.05f}, {0.0f, 0.0f}, {1.3f, 0.0f}, false, {0.0f, -1.0f}},
+      {"blocked from the south", {0.02f, -0.66f}, {0.05f, 0.1f}, {0.0f, 1.2f}, false, {-1.0f, 0.0f}},
+      {"the walker still moves at its wish", {-0.65f, -0.05f}, {1.2f, 0.0f}, {1.3f, 0.0f}, false, {0.0f, 0.0f}},
+      {"the walker wishes past it", {-0.65f, -0.05f}, {0.0f, 0.0f}, {0.0f, 1.3f}, false, {0.0f, 0.0f}},
+      {"the walker is 30 cm away", {-0.9f, -0.05f}, {0.0f, 0.0f}, {1.3f, 0.0f}, false, {0.0f, 0.0f}},
+      {"the walker holds still too", {-0.65f, -0.05f}, {0.0f, 0.0f}, {1.3f, 0.0f}, true, {0.0f, 0.0f}},
+  };
+  for (const Case& k : cases) {
+    for (int twin = 0; twin < 2; ++twin) {
+      AvoidanceScratch scratch;
+      Crowd c;
+      c.add({0.0f, 0.0f}, {0.0f, 0.0f});
+      c.add(k.walker, {10.0f, 0.0f});
+      c.vx[1] = k.walker_velocity.x, c.vz[1] = k.walker_velocity.y;
+      c.pref_vx[1] = k.walker_wish.x, c.pref_vz[1] = k.walker_wish.y;
+      std::vector<std::uint8_t> holds{1, static_cast<std::uint8_t>(k.walker_held ? 1 : 0)};
+      AvoidanceJob job = c.job(scratch);
+      job.holds = holds;
+      job.params.make_way = true;
+      ASSERT_TRUE(twin == 0 ? job.run() : strata::run_avoidance_reference(job)) << k.what;
+      const vec2 told(c.new_vx[0], c.new_vz[0]);
+      EXPECT_NEAR(told.x, k.expected.x, 1e-6f) << k.what << (twin ? " (twin)" : "");
+      EXPECT_NEAR(told.y, k.expected.y, 1e-6f) << k.what << (twin ? " (twin)" : "");
+      // Off, the same agent is told nothing: the paper's static obstacle.
+      job.params.make_way = false;
+      ASSERT_TRUE(job.run());
+      EXPECT_EQ(vec2(c.new_vx[0], c.new_vz[0]), vec2(0.0f)) << k.what;
+    }
+  }
+}
+
 TEST(Avoidance, ValidateRefusesBadTethers) {
   AvoidanceScratch scratch;
   Crowd c = random_crowd(10, 5.0f, 1);
