@@ -74,7 +74,9 @@ struct CrowdAgents {
   std::unique_ptr<ObstacleSet> obstacles;
   // The one ahead on a shared way keeps going, the one behind yields (AvoidanceParameters::right_of_way): over
   // seven bottleneck runs 87 -> 92 % in the goal region after 240 s on average, every crossing agent in with fewer
-  // waiting; the plaza's random goals, ~8 more agents stuck (docs/crowds.md).
+  // waiting; the plaza's random goals, ~8 more agents stuck. Those standing make way for a walker blocked against
+  // them (AvoidanceParameters::make_way, with SteeringParameters::make_way_step): the same seven runs 97 -> 100 %
+  // (docs/crowds.md).
   AvoidanceParameters avoidance{.right_of_way = 0.49f, .make_way = true};
   SteeringParameters steering;
   AgentMoveParameters move;
