@@ -77,6 +77,7 @@ enum AgentComponent : std::uint32_t {
   kAgentVx, kAgentVz,            // velocity it moved with this step (m/s), after turning and acceleration limits
   kAgentPrefVx, kAgentPrefVz,    // preferred velocity: navigation's output, avoidance's input
   kAgentOrcaVx, kAgentOrcaVz,    // avoidance's output: the collision-free velocity nearest the preferred one
+                                 // (with kAgentMakeWay: the unit direction to step aside)
   kAgentHeading,                 // facing (rad about +Y, 0 = +Z), turned towards the velocity at a limited rate
   kAgentRadius,                  // disc radius (m)
   kAgentPrefSpeed,               // preferred walking speed (m/s)
@@ -101,6 +102,7 @@ enum AgentFlag : std::uint32_t {
   kAgentArrived = 1u,   // has reached its (final) goal at least once
   kAgentNeedsPath = 2u, // plan before steering: new goal or lost corridor
   kAgentPartialPath = 4u,  // the last plan ended short of the goal (unreachable)
+  kAgentMakeWay = 8u,   // held still last step and pressed: kAgentOrcaVx/Vz is the direction to step aside
 };
 // Corners of the agent's current path, kAgentCorners of them (x, z), the first not yet reached first; the count is
 // in kWalkerAgentCorners' last component.

@@ -299,6 +299,12 @@ void run_avoidance_stage(Crowd& crowd, float dt) {
     SoaTable& t = crowd.world.table(crowd.tables[row.table]);
     t.f32(kWalkerAgent, kAgentOrcaVx)[row.row] = a.new_vx[k];
     t.f32(kWalkerAgent, kAgentOrcaVz)[row.row] = a.new_vz[k];
+    // A held agent's answer is no velocity: nonzero, it is where to make way (AvoidanceParameters::make_way).
+    std::uint32_t& flags = t.u32(kWalkerAgentState, kAgentFlags)[row.row];
+    if (a.holds[k] != 0 && (a.new_vx[k] != 0.0f || a.new_vz[k] != 0.0f))
+      flags |= kAgentMakeWay;
+    else
+      flags &= ~kAgentMakeWay;
   }
   for_each_agent_table(crowd, [&](SoaTable& t, std::uint32_t) {
     run_or_throw(make_agent_move_job(t, dt, a.move), "agent_move");

@@ -78,8 +78,7 @@ void steer_one(const SteerJob& job, std::size_t i) {
   //    in stood along the region's near edge, everyone behind pressed against them for the rest of the run and the
   //    region's far side stayed empty.
   //  - Only near the region while outside it: a queue far from it (the bottleneck's room) makes no headway for
-  //    long spells, and redrawing there threw away the point the agent was given for its place in the arrival
-  //    order (region_fill_point).
+  //    long spells, and a new point there changes nothing but where the agent heads once through.
   const float outside = spec.kind == GoalKind::Region
                             ? glm::length(glm::clamp(pos, spec.region_min, spec.region_max) - pos)
                             : 0.0f;
@@ -124,8 +123,11 @@ void steer_one(const SteerJob& job, std::size_t i) {
       ++job.state.at(kAgentWaypoint, i);
       set_goal(job, i, goal);
     } else {
+      // Only a held agent's answer asks it to make way: a walking one's is its velocity, which on arrival still
+      // points on along its way and would move its goal ahead of it.
+      const bool asked = (job.state.at(kAgentFlags, i) & kAgentMakeWay) != 0u;
       const glm::vec2 aside(a.at(kAgentOrcaVx, i), a.at(kAgentOrcaVz, i));
-      if (!(job.params.make_way_step > 0.0f && glm::dot(aside, aside) > 0.25f)) {
+      if (!(job.params.make_way_step > 0.0f && asked && glm::dot(aside, aside) > 0.25f)) {
         // A final goal: stand (the walk brings the feet together).
         a.at(kAgentPrefVx, i) = 0.0f;
         a.at(kAgentPrefVz, i) = 0.0f;
@@ -144,6 +146,7 @@ void steer_one(const SteerJob& job, std::size_t i) {
       c.at(0, i) = goal.x;
       c.at(1, i) = goal.y;
       c.at(kAgentCorners * 2, i) = 1.0f;
+      job.state.at(kAgentFlags, i) &= ~kAgentMakeWay;
     }
   }
 
