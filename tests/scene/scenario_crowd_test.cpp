@@ -216,6 +216,45 @@ TEST(ScenarioCrowd, ArrivalsMoveInRatherThanWallingOffTheRegion) {
   }
 }
 
+// Someone standing at its goal in a corridor too narrow to pass it steps aside for a walker blocked against it
+// (AvoidanceParameters::make_way, SteeringParameters::make_way_step); with making way off the walker never gets by.
+// A 1.6 m corridor: beside a standing body (0.3 m radius) in its middle, 0.5 m each side, where a body needs 0.6.
+TEST(ScenarioCrowd, AStandingAgentStepsAsideForAWalkerItBlocks) {
+  Scenario s;
+  s.name = "test-corridor";
+  s.ground_min = {-8.0f, -4.0f};
+  s.ground_max = {8.0f, 4.0f};
+  s.obstacles.push_back(ScenarioPolygon{{{-5.0f, 0.8f}, {5.0f, 0.8f}, {5.0f, 1.2f}, {-5.0f, 1.2f}}});
+  s.obstacles.push_back(ScenarioPolygon{{{-5.0f, -1.2f}, {5.0f, -1.2f}, {5.0f, -0.8f}, {-5.0f, -0.8f}}});
+  auto one = [](glm::vec2 at, glm::vec2 goal) {
+    SpawnGroup g;
+    g.shape = SpawnShape::Circle;
+    g.center = at;
+    g.radius = 0.01f;
+    g.count = 1;
+    g.goal.kind = GoalKind::Point;
+    g.goal.points = {goal};
+    return g;
+  };
+  s.groups.push_back(one({0.0f, 0.0f}, {0.0f, 0.0f}));   // stands where it starts, in the corridor's middle
+  s.groups.push_back(one({-4.0f, 0.0f}, {6.5f, 0.0f}));  // walks the corridor's length
+  double reached[2] = {0.0, 0.0};
+  for (int k = 0; k < 2; ++k) {
+    ScenarioSetup setup;
+    if (k == 1) setup.steering.make_way_step = 0.0f;
+    std::unique_ptr<Crowd> crowd = scenario_crowd(s, setup);
+    if (k == 1) crowd->agents->avoidance.make_way = false;
+    const Outcome o = run(*crowd, 40.0f);
+    EXPECT_EQ(o.crowd.overlaps, 0u);
+    EXPECT_EQ(o.crowd.nan_count, 0u);
+    EXPECT_EQ(o.gait.nan_count, 0u);
+    reached[k] = o.crowd.reached_goal_pct;
+    std::printf("%s making way: %.0f %% reached their goal\n", k == 0 ? "with" : "without", reached[k]);
+  }
+  EXPECT_DOUBLE_EQ(reached[0], 100.0) << "the walker got by";
+  EXPECT_DOUBLE_EQ(reached[1], 50.0) << "without making way the walker stays behind the standing one";
+}
+
 TEST(ScenarioCrowd, SameResultWhateverTheThreadCount) {
   std::uint64_t hashes[2] = {0, 0};
   const std::size_t threads[2] = {1, 2};
