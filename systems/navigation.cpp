@@ -139,9 +139,12 @@ void steer_one(const SteerJob& job, std::size_t i) {
       // at least a goal radius and a half, so it walks there rather than counting itself arrived where it is.
       const float step = std::max(job.params.make_way_step, 1.5f * a.at(kAgentGoalRadius, i));
       goal = pos + step * glm::normalize(aside);
+      // In a region goal the new spot stays in the region (seen from above: agents that had made way stood just
+      // past its side edges); at an edge that leaves it the part of the step along the edge.
+      if (spec.kind == GoalKind::Region) goal = glm::clamp(goal, spec.region_min, spec.region_max);
       a.at(kAgentGoalX, i) = goal.x;
       a.at(kAgentGoalZ, i) = goal.y;
-      a.at(kAgentBestDistance, i) = step;
+      a.at(kAgentBestDistance, i) = glm::length(goal - pos);
       a.at(kAgentSinceProgress, i) = 0.0f;
       c.at(0, i) = goal.x;
       c.at(1, i) = goal.y;
