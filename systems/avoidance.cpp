@@ -498,6 +498,46 @@ vec2 make_way_direction(const AvoidanceJob& job, std::uint32_t i, const Nearest*
   return vec2(0.0f);
 }
 
+// AvoidanceParameters::passing_angle: agent i's preferred velocity turned towards its passing side by the share of
+// the angle its nearest head-on neighbour on a collision course calls for (the largest share). Reads this step's
+// inputs only (positions, preferred velocities), so it is the same in the parallel job, the scalar twin and across
+// processes.
+vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t count) {
+  const AvoidanceParameters& prm = job.params;
+  const vec2 preferred(job.pref_vx[i], job.pref_vz[i]);
+  const float pref2 = length_squared(preferred);
+  constexpr float kMinWish2 = 0.1f * 0.1f;  // (m/s)^2: an agent that barely wants to move keeps to no side
+  if (prm.passing_angle == 0.0f || !(pref2 > kMinWish2)) return preferred;
+  const float pref_length = std::sqrt(pref2);
+  const vec2 way = preferred / pref_length;
+  const vec2 right(-way.y, way.x);  // the agent's right with y up (way x up)
+  const float side = prm.passing_angle > 0.0f ? 1.0f : -1.0f;
+  float share = 0.0f;
+  for (std::uint32_t k = 0; k < count; ++k) {
+    const std::uint32_t j = neighbours[k].index();
+    if (!job.holds.empty() && job.holds[j] != 0) continue;  // standing: avoided where it is, no side to agree on
+    const vec2 wish(job.pref_vx[j], job.pref_vz[j]);
+    const float wish2 = length_squared(wish);
+    if (!(wish2 > kMinWish2)) continue;
+    const float facing = dot2(wish, way);  // head-on: over 120 deg apart, cos < -0.5 (no square root)
+    if (!(facing < 0.0f && facing * facing > 0.25f * wish2)) continue;
+    const vec2 rel(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
+    const float along = dot2(rel, way);
+    const float r = job.radius[i] + job.radius[j];
+    // On a collision course: less than the radii's sum plus the margin across its way, on either side. (Turning
+    // only where the other is not already on the passing side, so as never to turn towards it, kept the 500-agent
+    // circle's jam less of a roundabout: 143 agents stuck on average over three seeds against 127; 1,000: 282
+    // against 132.)
+    if (!(along > 0.0f) || std::abs(dot2(rel, right)) >= r + prm.passing_margin) continue;
+    // Full with passing_full_gap or less between the bodies along its way, none at neighbor_distance.
+    const float fade = prm.neighbor_distance - r - prm.passing_full_gap;
+    share = std::max(share, fade > 0.0f ? std::clamp((prm.neighbor_distance - along) / fade, 0.0f, 1.0f) : 1.0f);
+  }
+  if (share == 0.0f) return preferred;
+  const float angle = std::abs(prm.passing_angle) * share;
+  return pref_length * (std::cos(angle) * way + side * std::sin(angle) * right);
+}
+
 // Agent i's new velocity from its chosen neighbours (sorted) and obstacle edges.
 template <class ForEachEdge>
 vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t neighbour_count,
@@ -514,7 +554,7 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
     planes[count++] = agent_plane(job, i, neighbours[k].index(), first);
 
   const float max_speed = job.max_speed[i];
-  const vec2 preferred(job.pref_vx[i], job.pref_vz[i]);
+  const vec2 preferred = passing_preferred(job, i, neighbours, neighbour_count);
   vec2 result;
   const std::size_t failed = solve_2d(planes.data(), count, max_speed, preferred, false, result);
   infeasible = failed < count;

@@ -26,6 +26,7 @@ struct Crowd {
   std::vector<float> px, pz, vx, vz, pref_vx, pref_vz, radius, max_speed, new_vx, new_vz;
   std::vector<vec2> goal;
   float preferred_speed = 1.4f;
+  strata::AvoidanceParameters params;  // step() runs with these (its dt aside)
 
   void add(vec2 p, vec2 g, float r = 0.3f, float speed = 1.4f) {
     px.push_back(p.x);
@@ -75,6 +76,7 @@ struct Crowd {
   bool step(AvoidanceScratch& scratch, const ObstacleSet* obstacles, float dt) {
     set_preferred();
     AvoidanceJob j = job(scratch, obstacles);
+    j.params = params;
     j.params.dt = dt;
     if (!j.run()) return false;
     for (std::size_t i = 0; i < size(); ++i) {
@@ -151,8 +153,9 @@ struct CircleRun {
   bool finite = true;
 };
 
-CircleRun run_circle(int n, float ring, int step_limit) {
+CircleRun run_circle(int n, float ring, int step_limit, float passing_angle = 0.0f) {
   Crowd c;
+  c.params.passing_angle = passing_angle;
   for (int k = 0; k < n; ++k) {
     const float a = 6.28318530718f * static_cast<float>(k) / static_cast<float>(n);
     const vec2 p(ring * std::cos(a), ring * std::sin(a));
@@ -200,6 +203,72 @@ TEST(Avoidance, DISABLED_CircleToAntipodesZeroOverlaps) {
   const CircleRun run = run_circle(128, 14.0f, 30 * 150);
   EXPECT_EQ(run.overlap_steps, 0);
   EXPECT_GT(run.worst_fraction, 1.0f - 0.01f / 0.6f);
+}
+
+// Passing side (AvoidanceParameters::passing_angle), one step from the velocities the agents want: two walkers
+// meeting head-on along x, 0.75 m apart across their ways, on a collision course within the margin but not inside
+// each other's velocity obstacle (so no half-plane binds while they turn apart). Each turns off to its own right (keeping left, to its
+// left) by the angle times the share for 3 m ahead: (4 - 3) / (4 - 0.6 - 1). No turn with the angle 0, for a
+// neighbour walking the same way or across, one standing still, or one beyond the margin.
+TEST(Avoidance, AWalkerMeetingAnotherHeadOnTurnsToItsPassingSide) {
+  const float angle = 0.3f, share = 1.0f / 2.4f;
+  auto one_step = [&](float passing_angle, vec2 p1, vec2 v1, bool hold_second = false) {
+    AvoidanceScratch scratch;
+    Crowd c;
+    c.add({0.0f, 0.0f}, {10.0f, 0.0f});
+    c.add(p1, p1 + v1);
+    c.vx = {1.4f, v1.x};
+    c.vz = {0.0f, v1.y};
+    c.pref_vx = c.vx;
+    c.pref_vz = c.vz;
+    const std::vector<std::uint8_t> holds = {0, static_cast<std::uint8_t>(hold_second ? 1 : 0)};
+    AvoidanceJob job = c.job(scratch);
+    job.params.dt = kDt;
+    job.params.passing_angle = passing_angle;
+    if (hold_second) job.holds = holds;
+    EXPECT_TRUE(job.run());
+    return c;
+  };
+  for (const float side : {1.0f, -1.0f}) {
+    SCOPED_TRACE(side);
+    // The other on the side away from which it turns (its half-plane would bind otherwise).
+    const Crowd c = one_step(side * angle, {3.0f, -0.75f * side}, {-1.4f, 0.0f});
+    // Its right with y up is +z for the first (walking +x), -z for the second (walking -x).
+    const float turn = side * angle * share;
+    EXPECT_NEAR(c.new_vx[0], 1.4f * std::cos(turn), 1e-5f);
+    EXPECT_NEAR(c.new_vz[0], 1.4f * std::sin(turn), 1e-5f);
+    EXPECT_NEAR(c.new_vx[1], -1.4f * std::cos(turn), 1e-5f);
+    EXPECT_NEAR(c.new_vz[1], -1.4f * std::sin(turn), 1e-5f);
+  }
+  const Crowd off = one_step(0.0f, {3.0f, -0.75f}, {-1.4f, 0.0f});
+  EXPECT_EQ(off.new_vx[0], 1.4f);
+  EXPECT_EQ(off.new_vz[0], 0.0f);
+  struct Case {
+    const char* what;
+    vec2 p1, v1;
+    bool hold;
+  };
+  for (const Case& k : {Case{"same way", {3.0f, -0.75f}, {1.0f, 0.0f}, false},
+                        Case{"across", {3.0f, -0.75f}, {0.0f, 1.4f}, false},
+                        Case{"standing", {3.0f, -0.75f}, {-1.4f, 0.0f}, true},
+                        Case{"beyond the margin", {3.0f, -0.95f}, {-1.4f, 0.0f}, false}}) {
+    const Crowd with = one_step(angle, k.p1, k.v1, k.hold), without = one_step(0.0f, k.p1, k.v1, k.hold);
+    EXPECT_EQ(with.new_vx[0], without.new_vx[0]) << k.what;
+    EXPECT_EQ(with.new_vz[0], without.new_vz[0]) << k.what;
+  }
+}
+
+// Where the whole ring meets in the centre, everyone keeping to the same side turns the jam into a roundabout: the
+// 128-agent circle below clears sooner than with ORCA alone, with overlap no deeper.
+TEST(Avoidance, KeepingToOneSideClearsTheCircleSooner) {
+  const CircleRun alone = run_circle(128, 14.0f, 30 * 150);
+  const CircleRun right = run_circle(128, 14.0f, 30 * 150, 0.3f);
+  std::printf("128 agents to their antipodes: %d steps with ORCA alone, %d keeping right (overlap steps %d, %d)\n",
+              alone.steps, right.steps, alone.overlap_steps, right.overlap_steps);
+  ASSERT_TRUE(right.finite);
+  EXPECT_TRUE(right.arrived);
+  EXPECT_LT(right.steps, alone.steps);
+  EXPECT_GT(right.worst_fraction, 0.88f);
 }
 
 TEST(Avoidance, WalksAroundABoxWithoutEnteringIt) {
@@ -366,6 +435,7 @@ TEST(Avoidance, JobEqualsBruteForceReference) {
     AvoidanceJob job = c.job(scratch, &obstacles);
     job.params.second_pass = second_pass;
     job.params.right_of_way = right_of_way;
+    job.params.passing_angle = right_of_way > 0.0f ? 0.3f : 0.0f;  // the crowds' settings together
     ASSERT_TRUE(job.run());
     const std::vector<float> fast_x = c.new_vx, fast_z = c.new_vz;
     std::fill(c.new_vx.begin(), c.new_vx.end(), -99.0f);
