@@ -281,9 +281,14 @@ float right_of_way_shift(const AvoidanceJob& job, std::uint32_t i, std::uint32_t
       along * along <= kCosSameWay * kCosSameWay * li * lj)
     return 0.0f;
   const vec2 way = ai + aj;
-  const float way_length = std::sqrt(length_squared(way));  // > 0: the two are within 60 deg
   const vec2 rel_p(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
-  const float ahead = dot2(rel_p, way) / (way_length * (job.radius[i] + job.radius[j]));
+  const float along_way = dot2(rel_p, way), radii = job.radius[i] + job.radius[j];
+  // Most neighbours are more than the radii's sum ahead or behind: the clamp below would give exactly +-1, so the
+  // square root and the division are skipped (the margin is far above their rounding: the same bits either way).
+  if (along_way * along_way > 1.001f * length_squared(way) * radii * radii)
+    return along_way > 0.0f ? job.params.right_of_way : -job.params.right_of_way;
+  const float way_length = std::sqrt(length_squared(way));  // > 0: the two are within 60 deg
+  const float ahead = along_way / (way_length * radii);
   return job.params.right_of_way * std::clamp(ahead, -1.0f, 1.0f);
 }
 
@@ -299,7 +304,14 @@ struct FirstPass {
 // `first` null: the ordinary ORCA half-plane from the current velocities, each side taking half. Otherwise (the
 // second pass): from both agents' first-pass velocities; a neighbour whose first pass succeeded keeps its answer,
 // so this agent takes the whole of the avoidance against it; one that failed too recomputes, so the half again.
-HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j, const FirstPass* first) {
+// 1 / time_horizon and 1 / dt, divided once per agent rather than per pair.
+struct Inverses {
+  float tau, dt;
+  explicit Inverses(const AvoidanceParameters& p) : tau(1.0f / p.time_horizon), dt(1.0f / p.dt) {}
+};
+
+HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j, const FirstPass* first,
+                      const Inverses& inverse) {
   const AvoidanceParameters& prm = job.params;
   const vec2 pi(job.px[i], job.pz[i]), pj(job.px[j], job.pz[j]);
   const vec2 vi = first ? vec2(first->vx[i], first->vz[i]) : vec2(job.vx[i], job.vz[i]);
@@ -322,7 +334,7 @@ HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j,
   vec2 u, n;
   if (dist2 > r2) {
     // Apart: VO is the cone from the origin tangent to the disc (rel_p / tau, r / tau), cut off at that disc.
-    const float inv_tau = 1.0f / prm.time_horizon;
+    const float inv_tau = inverse.tau;
     const vec2 w = rel_v - rel_p * inv_tau;  // from the cut-off disc's centre
     const float w2 = length_squared(w);
     const float w_dot_p = dot2(w, rel_p);
@@ -347,7 +359,7 @@ HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j,
   } else {
     // Overlapping (the paper's collision case): the obstacle is the disc (rel_p / dt, r / dt), so the pair is
     // pushed apart within one step.
-    const float inv_dt = 1.0f / prm.dt;
+    const float inv_dt = inverse.dt;
     const vec2 w = rel_v - rel_p * inv_dt;
     const float w2 = length_squared(w);
     if (w2 > kTinySquared) {
@@ -360,8 +372,16 @@ HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j,
       u = r * inv_dt * n;
     }
   }
-  const float gap = std::sqrt(dist2) - r;
-  return HalfPlane{vi + share * u, n, 1.0f / std::max(gap, kMinWeightGap)};
+  // The weight only matters in the fallback, which most agents never reach: agent_plane_weight fills it in there
+  // (a square root and a division per pair saved in a feasible solve).
+  return HalfPlane{vi + share * u, n, 0.0f};
+}
+
+// The fallback's weight of agent i's half-plane against neighbour j (kMinWeightGap).
+float agent_plane_weight(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j) {
+  const vec2 rel_p(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
+  const float gap = std::sqrt(length_squared(rel_p)) - (job.radius[i] + job.radius[j]);
+  return 1.0f / std::max(gap, kMinWeightGap);
 }
 
 // Collects agent i's obstacle half-planes into planes[0..); returns how many. Edges within reach (obstacle
@@ -550,8 +570,9 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   std::array<HalfPlane, kMaxPlanes> projected;
   const std::size_t hard = obstacle_planes(job, i, for_each_edge, planes.data());
   std::size_t count = hard;
+  const Inverses inverse(job.params);
   for (std::uint32_t k = 0; k < neighbour_count; ++k)
-    planes[count++] = agent_plane(job, i, neighbours[k].index(), first);
+    planes[count++] = agent_plane(job, i, neighbours[k].index(), first, inverse);
 
   const float max_speed = job.max_speed[i];
   const vec2 preferred = passing_preferred(job, i, neighbours, neighbour_count);
@@ -570,6 +591,8 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
     if (solve_2d(planes.data(), count + 1, max_speed, preferred, false, trial) == count + 1) result = trial;
   }
   if (failed < count) {
+    for (std::uint32_t k = 0; k < neighbour_count; ++k)
+      planes[hard + k].weight = agent_plane_weight(job, i, neighbours[k].index());
     // Obstacles stay hard unless they alone leave nothing (the agent wedged in a corner it overlaps).
     const std::size_t keep_hard = failed < hard ? 0 : hard;
     solve_minimax(planes.data(), count, keep_hard, failed, max_speed, projected.data(), result);
