@@ -64,8 +64,9 @@ vec2 direction_or(vec2 a, vec2 fallback) {
 struct HalfPlane {
   vec2 point;
   vec2 normal;          // unit; permitted where dot(v - point, normal) >= 0
-  float weight;  // how much a violation of it counts in the fallback (solve_minimax). No default member
-                 // initialiser: it would make the per-agent arrays of 96 planes be filled on every call.
+  float weight;  // how much a violation of it counts in the fallback (solve_minimax); a neighbour's plane gets
+                 // it only there (agent_plane_weight). No default member initialiser: it would make the
+                 // per-agent arrays of 96 planes be filled on every call.
 };
 
 float violation(const HalfPlane& h, vec2 v) { return -dot2(v - h.point, h.normal); }
@@ -518,8 +519,8 @@ vec2 make_way_direction(const AvoidanceJob& job, std::uint32_t i, const Nearest*
   return vec2(0.0f);
 }
 
-// AvoidanceParameters::passing_angle: agent i's preferred velocity turned towards its passing side by the share of
-// the angle its nearest head-on neighbour on a collision course calls for (the largest share). Reads this step's
+// AvoidanceParameters::passing_angle: agent i's preferred velocity turned towards its passing side by the largest
+// share of the angle that any head-on neighbour on a collision course calls for. Reads this step's
 // inputs only (positions, preferred velocities), so it is the same in the parallel job, the scalar twin and across
 // processes.
 vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t count) {
@@ -547,7 +548,7 @@ vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Nearest* 
     // On a collision course: less than the radii's sum plus the margin across its way, on either side. (Turning
     // only where the other is not already on the passing side, so as never to turn towards it, kept the 500-agent
     // circle's jam less of a roundabout: 143 agents stuck on average over three seeds against 127; 1,000: 282
-    // against 132.)
+    // against 132-133.)
     if (!(along > 0.0f) || std::abs(dot2(rel, right)) >= r + prm.passing_margin) continue;
     // Full with passing_full_gap or less between the bodies along its way, none at neighbor_distance.
     const float fade = prm.neighbor_distance - r - prm.passing_full_gap;
@@ -674,6 +675,10 @@ bool validate_job(const AvoidanceJob& job, bool need_scratch) {
   if (p.neighbor_distance > 2.0f * kAvoidanceMaxCoordinate) return false;
   if (p.max_neighbors == 0 || p.max_neighbors > kAvoidanceMaxNeighbors) return false;
   if (!(p.right_of_way >= 0.0f && p.right_of_way <= 0.5f)) return false;  // NaN too
+  // A turn past a right angle would walk away from the goal; NaN or a negative margin or gap never compares true.
+  if (!(std::abs(p.passing_angle) <= 1.5707964f) || !(p.passing_margin >= 0.0f && std::isfinite(p.passing_margin)) ||
+      !(p.passing_full_gap >= 0.0f && std::isfinite(p.passing_full_gap)))
+    return false;
   const std::size_t n = job.px.size();
   for (std::size_t size : {job.pz.size(), job.vx.size(), job.vz.size(), job.pref_vx.size(), job.pref_vz.size(),
                            job.radius.size(), job.max_speed.size(), job.new_vx.size(), job.new_vz.size()})

@@ -66,13 +66,14 @@ struct AvoidanceParameters {
   // up to passing_angle rad (negative: to its left), fully with passing_full_gap or less between the bodies and
   // fading to nothing at neighbor_distance. The half-planes are untouched, so ORCA's guarantee is too; the turn
   // only moves the velocity the agent would most like among those they permit. Where many meet from all sides,
-  // everyone bearing the same way turns the jam into a roundabout (the circle of 1,000: 541 agents stuck -> 132;
+  // everyone bearing the same way turns the jam into a roundabout (the circle of 1,000: 541 agents stuck -> 133;
   // three 500-agent circles 191 -> 127 on average). A lone pair is not steered by it: their half-planes commit to
   // a side as soon as they come within range. Rejected: forcing the agreed side into the half-plane of a head-on
   // pair when it cost at most 0.15-0.4 m/s more change: lone pairs then kept right, but the 1,000-agent circle had
   // 483 stuck with it alone, 255 with the turn too, and up to twice the frames with a leg out of reach (sharp
   // sidesteps); a 1.5 m margin (75 stuck in the 500-agent circles) made the plaza's walkers swerve for people well
-  // off their line (40 -> 65 stuck, 34 -> 40 s to goal over three seeds). 0: off, the paper's ORCA.
+  // off their line (40 -> 65 stuck, 34 -> 40 s to goal over three seeds). 0: off, the paper's ORCA. validate()
+  // refuses |passing_angle| over pi/2 and a negative or non-finite margin or gap.
   float passing_angle = 0.0f;
   float passing_margin = 0.3f;    // m
   float passing_full_gap = 1.0f;  // m between the bodies

@@ -628,6 +628,20 @@ TEST(Avoidance, ValidateRefusesBadInputAndWritesNothing) {
       job.params.right_of_way = right_of_way;  // outside 0..0.5: a share would turn negative
       refused_untouched(c, job);
     }
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (const float angle : {1.6f, -1.6f, nan}) {
+      job = c.job(scratch);
+      job.params.passing_angle = angle;
+      refused_untouched(c, job);
+    }
+    for (const float length : {-0.1f, nan, std::numeric_limits<float>::infinity()}) {
+      job = c.job(scratch);
+      job.params.passing_margin = length;
+      refused_untouched(c, job);
+      job = c.job(scratch);
+      job.params.passing_full_gap = length;
+      refused_untouched(c, job);
+    }
   }
   {
     Crowd c = random_crowd(10, 5.0f, 1);
