@@ -53,7 +53,7 @@ struct SpawnGroup {
 
 // Agent parameters, the same for every group (per-agent variety is drawn from the distributions with the seed).
 struct AgentParameters {
-  float radius = 0.3f;                      // m, > 0: the disc ORCA keeps apart
+  float radius = 0.25f;                     // m, > 0: the disc ORCA keeps apart
   float speed_mean = 1.3f, speed_sd = 0.15f;  // preferred walking speed, m/s: normal, clamped to [min, max]
   float speed_min = 0.8f, speed_max = 1.8f;
   float height_mean = 1.72f, height_sd = 0.07f;  // body height, m (normal, clamped to +- 3 sd)

@@ -6,7 +6,7 @@
 //     "ground": { "min": [-20, -20], "max": [20, 20] },
 //     "obstacles": [ { "polygon": [[0, 0], [2, 0], [1, 2]] },
 //                    { "box": { "center": [5, 5], "size": [4, 0.2], "angle_deg": 30 } } ],
-//     "agents": { "radius": 0.3, "speed": { "mean": 1.3, "sd": 0.15, "min": 0.8, "max": 1.8 } },
+//     "agents": { "radius": 0.25, "speed": { "mean": 1.3, "sd": 0.15, "min": 0.8, "max": 1.8 } },
 //     "groups": [ { "name": "west", "count": 50,
 //                   "spawn": { "shape": "rect", "min": [-18, -5], "max": [-12, 5] },
 //                   "goal": { "kind": "region", "min": [12, -5], "max": [18, 5] } } ],

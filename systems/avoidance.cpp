@@ -286,11 +286,22 @@ float right_of_way_shift(const AvoidanceJob& job, std::uint32_t i, std::uint32_t
   const float along_way = dot2(rel_p, way), radii = job.radius[i] + job.radius[j];
   // Most neighbours are more than the radii's sum ahead or behind: the clamp below would give exactly +-1, so the
   // square root and the division are skipped (the margin is far above their rounding: the same bits either way).
+  // The one ahead moving back along the way loses its right of way (right_of_way_back_fade). Both agents of the
+  // pair compute the same leader, from the same velocity and `way`, so their shifts stay each other's negation.
+  float row = job.params.right_of_way;
+  if (job.params.right_of_way_back_fade > 0.0f && along_way != 0.0f) {
+    const std::uint32_t leader = along_way > 0.0f ? j : i;
+    const float back = -dot2(vec2(job.vx[leader], job.vz[leader]), way);
+    if (back > 0.0f) {
+      const float back_speed = back / std::sqrt(length_squared(way));
+      row *= std::max(0.0f, 1.0f - back_speed / job.params.right_of_way_back_fade);
+    }
+  }
   if (along_way * along_way > 1.001f * length_squared(way) * radii * radii)
-    return along_way > 0.0f ? job.params.right_of_way : -job.params.right_of_way;
+    return along_way > 0.0f ? row : -row;
   const float way_length = std::sqrt(length_squared(way));  // > 0: the two are within 60 deg
   const float ahead = along_way / (way_length * radii);
-  return job.params.right_of_way * std::clamp(ahead, -1.0f, 1.0f);
+  return row * std::clamp(ahead, -1.0f, 1.0f);
 }
 
 // Agent i's half-plane against neighbour j (the paper's ORCA_{i|j}): u is the smallest change of the relative
@@ -675,6 +686,7 @@ bool validate_job(const AvoidanceJob& job, bool need_scratch) {
   if (p.neighbor_distance > 2.0f * kAvoidanceMaxCoordinate) return false;
   if (p.max_neighbors == 0 || p.max_neighbors > kAvoidanceMaxNeighbors) return false;
   if (!(p.right_of_way >= 0.0f && p.right_of_way <= 0.5f)) return false;  // NaN too
+  if (!(p.right_of_way_back_fade >= 0.0f && std::isfinite(p.right_of_way_back_fade))) return false;
   // A turn past a right angle would walk away from the goal; NaN or a negative margin or gap never compares true.
   if (!(std::abs(p.passing_angle) <= 1.5707964f) || !(p.passing_margin >= 0.0f && std::isfinite(p.passing_margin)) ||
       !(p.passing_full_gap >= 0.0f && std::isfinite(p.passing_full_gap)))

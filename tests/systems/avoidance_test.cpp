@@ -436,6 +436,7 @@ TEST(Avoidance, JobEqualsBruteForceReference) {
     job.params.second_pass = second_pass;
     job.params.right_of_way = right_of_way;
     job.params.passing_angle = right_of_way > 0.0f ? 0.3f : 0.0f;  // the crowds' settings together
+    job.params.right_of_way_back_fade = right_of_way > 0.0f ? 0.2f : 0.0f;
     ASSERT_TRUE(job.run());
     const std::vector<float> fast_x = c.new_vx, fast_z = c.new_vz;
     std::fill(c.new_vx.begin(), c.new_vx.end(), -99.0f);
@@ -495,6 +496,47 @@ TEST(Avoidance, TheOneAheadKeepsItsLineTheOneBehindYields) {
     EXPECT_EQ(halves.new_vx, shifted.new_vx) << "head on " << head_on;
     EXPECT_EQ(halves.new_vz, shifted.new_vz) << "head on " << head_on;
   }
+}
+
+// AvoidanceParameters::right_of_way_back_fade: the one ahead moving back along the common way keeps no right of way
+// (faded out at the fade speed): the one behind, backed into, takes half as with halves instead of giving way for
+// both. A leader going forwards keeps it, bit for bit.
+TEST(Avoidance, TheOneAheadBackingIntoTheOneBehindLosesItsRightOfWay) {
+  const float dt = 1.0f / 30.0f;
+  auto one_step = [&](float right_of_way, float fade, vec2 v_front) {
+    AvoidanceScratch scratch;
+    Crowd c;
+    const vec2 front(0.0f, 0.0f), behind(-0.75f, 0.03f);
+    c.add(front, front + vec2(5.0f, 0.0f));
+    c.add(behind, behind + vec2(5.0f, 0.0f));
+    c.vx = {v_front.x, 0.2f};
+    c.vz = {v_front.y, 0.0f};
+    c.pref_vx = {1.2f, 1.2f};  // both want to go on along +x
+    c.pref_vz = {0.0f, 0.0f};
+    AvoidanceJob job = c.job(scratch);
+    job.params.dt = dt;
+    job.params.right_of_way = right_of_way;
+    job.params.right_of_way_back_fade = fade;
+    EXPECT_TRUE(job.run());
+    return c;
+  };
+  // Pushed back at 0.6 m/s into the one behind (which walks on at 0.2 m/s).
+  const vec2 backing(-0.6f, 0.0f);
+  const Crowd halves = one_step(0.0f, 0.0f, backing), yielding = one_step(0.49f, 0.0f, backing),
+              faded = one_step(0.49f, 0.2f, backing);
+  std::printf("the one behind, backed into: %.3f m/s along +x with halves, %.3f giving way for both, %.3f faded\n",
+              halves.new_vx[1], yielding.new_vx[1], faded.new_vx[1]);
+  EXPECT_LT(yielding.new_vx[1], halves.new_vx[1] - 0.1f) << "without the fade the one behind backs off for both";
+  EXPECT_EQ(faded.new_vx, halves.new_vx);
+  EXPECT_EQ(faded.new_vz, halves.new_vz);
+  // Backing at half the fade speed: half the right of way, in between.
+  const Crowd half_faded = one_step(0.49f, 1.2f, backing);
+  EXPECT_GT(half_faded.new_vx[1], yielding.new_vx[1]);
+  EXPECT_LT(half_faded.new_vx[1], halves.new_vx[1]);
+  // Going forwards (slower than the one behind): the fade changes nothing.
+  const Crowd ahead_plain = one_step(0.49f, 0.0f, {0.1f, 0.0f}), ahead_faded = one_step(0.49f, 0.2f, {0.1f, 0.0f});
+  EXPECT_EQ(ahead_plain.new_vx, ahead_faded.new_vx);
+  EXPECT_EQ(ahead_plain.new_vz, ahead_faded.new_vz);
 }
 
 TEST(Avoidance, SameBitsForAnyThreadCount) {
@@ -629,6 +671,11 @@ TEST(Avoidance, ValidateRefusesBadInputAndWritesNothing) {
       refused_untouched(c, job);
     }
     const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (const float fade : {-0.1f, nan, std::numeric_limits<float>::infinity()}) {
+      job = c.job(scratch);
+      job.params.right_of_way_back_fade = fade;
+      refused_untouched(c, job);
+    }
     for (const float angle : {1.6f, -1.6f, nan}) {
       job = c.job(scratch);
       job.params.passing_angle = angle;
