@@ -70,7 +70,7 @@ struct AgentMoveParameters {
   // facing_direction: from this speed (m/s) a body carried within face_side_angle (rad) of where it wants to go
   // faces its velocity.
   float face_velocity_speed = 0.4f;
-  float face_side_angle = 1.6f;
+  float face_side_angle = 1.2f;
 };
 
 // The velocity a walking body can take up this step on its way to `wish`: turned from its heading by at most its

@@ -188,9 +188,15 @@ struct GaitStyle {
   float agent_acceleration = 0.8f;
   // Agents carried by avoidance at this speed (m/s) or faster, within face_side_angle (rad) of where they want to
   // go, face where they go (systems/agent_move.h facing_direction): a person edging through a crowd turns the body
-  // into the gap rather than walking sideways.
+  // into the gap rather than walking sideways. Carried further off (past 69 degrees), the body keeps facing its way
+  // and steps across: at 1.6 rad (92 degrees) walkers caught in the crossing's other stream turned with it, their
+  // wish (turned from the heading, slowed while facing away) fell to ~0.15 m/s along the stream, and they were
+  // carried 10 m off for 5-8 s; every one of that run's 12 stuck agents was such a one. Over six crossing seeds
+  // stuck 14.7 -> 7.3 on average, three 500-agent circles 51 -> 15, four plaza seeds 30 -> 22.5, the largest
+  // slides alike; 1.4 rad gave 8.3, 26 and 30; 1.0, 5.0 stuck in the crossing but slides up to 61 / 75 mm in the
+  // crossing / plaza (docs/crowds.md).
   float face_velocity_speed = 0.4f;
-  float face_side_angle = 1.6f;
+  float face_side_angle = 1.2f;
   // Agents: the walk predicts the course turning towards the steering target while the velocity is within this
   // share of the wish's speed of the wish (systems/locomotion.cpp advance_gait_clock); straight on otherwise.
   float steering_tolerance = 0.3f;

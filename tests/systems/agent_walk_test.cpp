@@ -294,13 +294,21 @@ TEST(AgentWalk, FacingDirectionIsTheWishUnlessCarriedAcrossAtWalkingPace) {
       << "no target: the wish's way";
   EXPECT_EQ(facing_direction({0.7f, 0.0f}, {0.0f, 0.01f}, ahead, speed, side), glm::vec2(0.7f, 0.0f)) << "no wish";
   EXPECT_EQ(facing_direction({0.01f, 0.0f}, {0.0f, 0.01f}, ahead, speed, side), glm::vec2(0.0f)) << "nothing either way";
+  // The walk's own angle: swept nearly across its way (the other stream of a crossing) a body keeps facing its way,
+  // so its wish stays along it; carried 60 degrees off it turns into the gap.
+  const GaitStyle style;
+  EXPECT_EQ(facing_direction({1.2f, 0.1f}, wish, ahead, style.face_velocity_speed, style.face_side_angle), wish)
+      << "85 deg off at 1.2 m/s";
+  EXPECT_EQ(facing_direction({1.0f, 0.58f}, wish, ahead, style.face_velocity_speed, style.face_side_angle),
+            glm::vec2(1.0f, 0.58f))
+      << "60 deg off";
 }
 
 // Carried across its wish at a walking pace for a few seconds (avoidance sending it round someone), a walker turns
 // to face where it goes and keeps its feet planted; told to keep facing its wish, the same walker walks sideways on a
 // forward gait.
 TEST(AgentWalk, ACarriedBodyTurnsToWhereItGoesAndKeepsItsFeet) {
-  const glm::vec2 wish(0.0f, 1.2f), carried(1.1f, 0.3f);
+  const glm::vec2 wish(0.0f, 1.2f), carried(0.99f, 0.57f);  // 1.14 m/s, 60 deg off its wish
   double slide[2] = {0.0, 0.0};
   float heading_after[2] = {0.0f, 0.0f};
   for (int facing = 0; facing < 2; ++facing) {
