@@ -284,10 +284,9 @@ float right_of_way_shift(const AvoidanceJob& job, std::uint32_t i, std::uint32_t
   const vec2 way = ai + aj;
   const vec2 rel_p(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
   const float along_way = dot2(rel_p, way), radii = job.radius[i] + job.radius[j];
-  // Most neighbours are more than the radii's sum ahead or behind: the clamp below would give exactly +-1, so the
-  // square root and the division are skipped (the margin is far above their rounding: the same bits either way).
   // The one ahead moving back along the way loses its right of way (right_of_way_back_fade). Both agents of the
-  // pair compute the same leader, from the same velocity and `way`, so their shifts stay each other's negation.
+  // pair compute the same leader (along_way only changes sign between them, and `way` is the same sum), from the
+  // same velocity, so their shifts stay each other's negation.
   float row = job.params.right_of_way;
   if (job.params.right_of_way_back_fade > 0.0f && along_way != 0.0f) {
     const std::uint32_t leader = along_way > 0.0f ? j : i;
@@ -297,6 +296,8 @@ float right_of_way_shift(const AvoidanceJob& job, std::uint32_t i, std::uint32_t
       row *= std::max(0.0f, 1.0f - back_speed / job.params.right_of_way_back_fade);
     }
   }
+  // Most neighbours are more than the radii's sum ahead or behind: the clamp below would give exactly +-1, so the
+  // square root and the division are skipped (the margin is far above their rounding: the same bits either way).
   if (along_way * along_way > 1.001f * length_squared(way) * radii * radii)
     return along_way > 0.0f ? row : -row;
   const float way_length = std::sqrt(length_squared(way));  // > 0: the two are within 60 deg
