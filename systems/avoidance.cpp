@@ -283,7 +283,7 @@ float right_of_way_shift(const AvoidanceJob& job, std::uint32_t i, std::uint32_t
     return 0.0f;
   const vec2 way = ai + aj;
   const vec2 rel_p(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
-  const float along_way = dot2(rel_p, way), radii = job.radius[i] + job.radius[j];
+  const float along_way = dot2(rel_p, way), radii = job.radius[i] + job.radius[j], way2 = length_squared(way);
   // The one ahead moving back along the way loses its right of way (right_of_way_back_fade). Both agents of the
   // pair compute the same leader (along_way only changes sign between them, and `way` is the same sum), from the
   // same velocity, so their shifts stay each other's negation.
@@ -292,15 +292,15 @@ float right_of_way_shift(const AvoidanceJob& job, std::uint32_t i, std::uint32_t
     const std::uint32_t leader = along_way > 0.0f ? j : i;
     const float back = -dot2(vec2(job.vx[leader], job.vz[leader]), way);
     if (back > 0.0f) {
-      const float back_speed = back / std::sqrt(length_squared(way));
+      const float back_speed = back / std::sqrt(way2);
       row *= std::max(0.0f, 1.0f - back_speed / job.params.right_of_way_back_fade);
     }
   }
   // Most neighbours are more than the radii's sum ahead or behind: the clamp below would give exactly +-1, so the
   // square root and the division are skipped (the margin is far above their rounding: the same bits either way).
-  if (along_way * along_way > 1.001f * length_squared(way) * radii * radii)
+  if (along_way * along_way > 1.001f * way2 * radii * radii)
     return along_way > 0.0f ? row : -row;
-  const float way_length = std::sqrt(length_squared(way));  // > 0: the two are within 60 deg
+  const float way_length = std::sqrt(way2);  // > 0: the two are within 60 deg
   const float ahead = along_way / (way_length * radii);
   return row * std::clamp(ahead, -1.0f, 1.0f);
 }
