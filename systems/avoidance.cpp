@@ -205,6 +205,11 @@ bool closer(const Nearest& a, const Nearest& b) { return a.key < b.key; }
   if (count < capacity) ++count;
 }
 
+// Sorts items[0..count) by key, ascending.
+void sort_nearest(Nearest* items, std::uint32_t count) {
+  std::sort(items, items + count, closer);
+}
+
 // The same for obstacle edges, which arrive once per grid cell they cross: an exact duplicate is dropped.
 void keep_nearest_unique(Nearest* items, std::uint32_t& count, std::uint32_t capacity, Nearest candidate) {
   for (std::uint32_t k = 0; k < count; ++k)
@@ -545,26 +550,30 @@ vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Nearest* 
   const vec2 way = preferred / pref_length;
   const vec2 right(-way.y, way.x);  // the agent's right with y up (way x up)
   const float side = prm.passing_angle > 0.0f ? 1.0f : -1.0f;
+  // Every neighbour's test is computed in full and selected rather than branched on: whether a neighbour comes
+  // head-on is a coin toss in a mixed crowd, and the early exits' mispredictions made this loop 9 % of the
+  // avoidance job at the crowds' settings (perf, BM_AvoidanceCrowds' crowd). Same arithmetic, same bits.
   float share = 0.0f;
+  const bool any_holds = !job.holds.empty();
   for (std::uint32_t k = 0; k < count; ++k) {
     const std::uint32_t j = neighbours[k].index();
-    if (!job.holds.empty() && job.holds[j] != 0) continue;  // standing: avoided where it is, no side to agree on
     const vec2 wish(job.pref_vx[j], job.pref_vz[j]);
     const float wish2 = length_squared(wish);
-    if (!(wish2 > kMinWish2)) continue;
     const float facing = dot2(wish, way);  // head-on: over 120 deg apart, cos < -0.5 (no square root)
-    if (!(facing < 0.0f && facing * facing > 0.25f * wish2)) continue;
     const vec2 rel(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
     const float along = dot2(rel, way);
     const float r = job.radius[i] + job.radius[j];
     // On a collision course: less than the radii's sum plus the margin across its way, on either side. (Turning
     // only where the other is not already on the passing side, so as never to turn towards it, kept the 500-agent
     // circle's jam less of a roundabout: 143 agents stuck on average over three seeds against 127; 1,000: 282
-    // against 132-133.)
-    if (!(along > 0.0f) || std::abs(dot2(rel, right)) >= r + prm.passing_margin) continue;
+    // against 132-133.) A standing neighbour is avoided where it is: no side to agree on.
+    const bool head_on = (wish2 > kMinWish2) & (facing < 0.0f) & (facing * facing > 0.25f * wish2) &
+                         (along > 0.0f) & (std::abs(dot2(rel, right)) < r + prm.passing_margin) &
+                         !(any_holds && job.holds[j] != 0);
     // Full with passing_full_gap or less between the bodies along its way, none at neighbor_distance.
     const float fade = prm.neighbor_distance - r - prm.passing_full_gap;
-    share = std::max(share, fade > 0.0f ? std::clamp((prm.neighbor_distance - along) / fade, 0.0f, 1.0f) : 1.0f);
+    const float full = fade > 0.0f ? std::clamp((prm.neighbor_distance - along) / fade, 0.0f, 1.0f) : 1.0f;
+    share = std::max(share, head_on ? full : 0.0f);
   }
   if (share == 0.0f) return preferred;
   const float angle = std::abs(prm.passing_angle) * share;
@@ -847,7 +856,9 @@ bool AvoidanceJob::run() const {
     s.infeasible.resize(n);
     s.first_vx.resize(n);
     s.first_vz.resize(n);
+    s.kept_count.resize(n);
   }
+  if (s.kept_neighbors.size() < n * params.max_neighbors) s.kept_neighbors.resize(n * params.max_neighbors);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t c = g.cell_of(px[i], pz[i]);
     s.agent_cell[i] = c;
@@ -876,6 +887,61 @@ bool AvoidanceJob::run() const {
       for (int dx = -ring; dx <= ring; ++dx)
         if (std::max(std::abs(dx), std::abs(dz)) == ring) offsets_storage[offset_count++] = CellOffset{dx, dz};
   const std::span<const CellOffset> offsets(offsets_storage.data(), offset_count);
+  // Agent i's nearest neighbours within reach into nearest[0..), sorted by (squared distance, index); returns how
+  // many. Cells nearest first (the block's rings), each skipped when even its nearest point is farther than the
+  // current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could not enter
+  // the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
+  const float below_reach = std::nextafter(reach2, 0.0f);  // d2 < reach2 <=> d2 <= below_reach
+  auto search = [&](std::uint32_t i, float x, float z, Nearest* nearest) {
+    const std::uint32_t c = s.agent_cell[i];
+    const std::uint32_t cx = c % g.cols, cz = c / g.cols;
+    // The squared distance from the agent to each column and each row of cells the block spans (the distance
+    // to a cell is then one sum): 2 x (2 block + 1) terms instead of two per cell.
+    std::array<double, 5> ex2, ez2;
+    for (int d = -block; d <= block; ++d) {
+      const double x0 = g.origin_x + static_cast<double>(static_cast<std::int64_t>(cx) + d) * g.cell;
+      const double z0 = g.origin_z + static_cast<double>(static_cast<std::int64_t>(cz) + d) * g.cell;
+      // Nested two-argument max (maxsd), not std::max({...}): the initializer-list form became a loop whose
+      // branch was a fifth of the job's mispredictions (callgrind).
+      const double ex = std::max(0.0, std::max(x0 - x, x - (x0 + g.cell)));
+      const double ez = std::max(0.0, std::max(z0 - z, z - (z0 + g.cell)));
+      ex2[static_cast<std::size_t>(d + block)] = ex * ex;
+      ez2[static_cast<std::size_t>(d + block)] = ez * ez;
+    }
+    // One comparison per candidate: `admit` is the largest squared distance that could still enter the list,
+    // below_reach or, once the list is full, its last distance if smaller (an equal distance may still win on its
+    // index; keep_nearest decides). The list is filled unsorted and sorted once when full: a sorted insert per
+    // candidate mispredicted where its shift ended nearly every time (perf: a tenth of the job), and the range
+    // test followed by the list's doubled the mispredictions of one.
+    std::uint32_t count = 0;
+    float admit = below_reach;
+    for (const CellOffset& o : offsets) {
+      const std::int64_t xx = static_cast<std::int64_t>(cx) + o.dx, zz = static_cast<std::int64_t>(cz) + o.dz;
+      if (xx < 0 || zz < 0 || xx >= g.cols || zz >= g.rows) continue;
+      const float limit = count < capacity ? reach2 : nearest[count - 1].d2();
+      if (ex2[static_cast<std::size_t>(o.dx + block)] + ez2[static_cast<std::size_t>(o.dz + block)] >
+          static_cast<double>(limit) * (1.0 + 1e-4) + 1e-6)
+        continue;
+      const std::size_t cell = static_cast<std::size_t>(zz) * g.cols + static_cast<std::size_t>(xx);
+      for (std::uint32_t k = s.cell_start[cell]; k < s.cell_start[cell + 1]; ++k) {
+        const float dx = s.sorted_x[k] - x, dz = s.sorted_z[k] - z;
+        const float d2 = dx * dx + dz * dz;
+        if (!(d2 <= admit)) continue;
+        const std::uint32_t j = s.cell_agents[k];
+        if (j == i) continue;
+        if (count < capacity) {
+          nearest[count++] = Nearest{d2, j};
+          if (count < capacity) continue;
+          sort_nearest(nearest, count);
+        } else {
+          keep_nearest(nearest, count, capacity, Nearest{d2, j});
+        }
+        admit = std::min(below_reach, nearest[count - 1].d2());
+      }
+    }
+    if (count < capacity) sort_nearest(nearest, count);
+    return count;
+  };
   const ObstacleSet* obstacle_set = obstacles;
   // Fixed chunks of 256 agents in grid order (a chunk is a patch of neighbouring cells, so the cells it scans
   // stay in cache: ~13 % faster at 10,000 agents than index order); each agent's result depends only on the
@@ -887,41 +953,14 @@ bool AvoidanceJob::run() const {
         const std::uint32_t i = s.cell_agents[slot];
         if (first != nullptr && first->infeasible[i] == 0) continue;
         const float x = px[i], z = pz[i];
-        const std::uint32_t c = s.agent_cell[i];
-        const std::uint32_t cx = c % g.cols, cz = c / g.cols;
-        std::uint32_t count = 0;
-        // The squared distance from the agent to each column and each row of cells the block spans (the distance
-        // to a cell is then one sum): 2 x (2 block + 1) terms instead of two per cell.
-        std::array<double, 5> ex2, ez2;
-        for (int d = -block; d <= block; ++d) {
-          const double x0 = g.origin_x + static_cast<double>(static_cast<std::int64_t>(cx) + d) * g.cell;
-          const double z0 = g.origin_z + static_cast<double>(static_cast<std::int64_t>(cz) + d) * g.cell;
-          // Nested two-argument max (maxsd), not std::max({...}): the initializer-list form became a loop whose
-          // branch was a fifth of the job's mispredictions (callgrind).
-          const double ex = std::max(0.0, std::max(x0 - x, x - (x0 + g.cell)));
-          const double ez = std::max(0.0, std::max(z0 - z, z - (z0 + g.cell)));
-          ex2[static_cast<std::size_t>(d + block)] = ex * ex;
-          ez2[static_cast<std::size_t>(d + block)] = ez * ez;
-        }
-        // Cells nearest first (the block's rings), each skipped when even its nearest point is farther than the
-        // current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could not
-        // enter the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
-        for (const CellOffset& o : offsets) {
-          const std::int64_t xx = static_cast<std::int64_t>(cx) + o.dx, zz = static_cast<std::int64_t>(cz) + o.dz;
-          if (xx < 0 || zz < 0 || xx >= g.cols || zz >= g.rows) continue;
-          const float limit = count < capacity ? reach2 : nearest[count - 1].d2();
-          if (ex2[static_cast<std::size_t>(o.dx + block)] + ez2[static_cast<std::size_t>(o.dz + block)] >
-              static_cast<double>(limit) * (1.0 + 1e-4) + 1e-6)
-            continue;
-          const std::size_t cell = static_cast<std::size_t>(zz) * g.cols + static_cast<std::size_t>(xx);
-          for (std::uint32_t k = s.cell_start[cell]; k < s.cell_start[cell + 1]; ++k) {
-            const float dx = s.sorted_x[k] - x, dz = s.sorted_z[k] - z;
-            const float d2 = dx * dx + dz * dz;
-            if (!(d2 < reach2)) continue;
-            if (count == capacity && d2 > nearest[count - 1].d2()) continue;
-            const std::uint32_t j = s.cell_agents[k];
-            if (j != i) keep_nearest(nearest.data(), count, capacity, Nearest{d2, j});
-          }
+        std::uint64_t* kept = s.kept_neighbors.data() + static_cast<std::size_t>(i) * capacity;
+        std::uint32_t count;
+        if (first == nullptr) {
+          count = search(i, x, z, nearest.data());
+        } else {
+          // The second pass: the same positions, so the neighbours the first pass kept for this agent.
+          count = s.kept_count[i];
+          for (std::uint32_t k = 0; k < count; ++k) nearest[k].key = kept[k];
         }
         const vec2 p(x, z);
         const float edge_reach = params.obstacle_time_horizon * max_speed[i] + radius[i];
@@ -930,7 +969,13 @@ bool AvoidanceJob::run() const {
         };
         bool infeasible = false;
         const vec2 v = solve_agent(*this, i, nearest.data(), count, edges, first, infeasible);
-        if (first == nullptr) s.infeasible[i] = infeasible ? 1 : 0;
+        if (first == nullptr) {
+          s.infeasible[i] = infeasible ? 1 : 0;
+          if (infeasible) {
+            s.kept_count[i] = count;
+            for (std::uint32_t k = 0; k < count; ++k) kept[k] = nearest[k].key;
+          }
+        }
         new_vx[i] = v.x;
         new_vz[i] = v.y;
       }

@@ -154,6 +154,11 @@ struct AvoidanceScratch {
   std::vector<float> sorted_x, sorted_z;   // positions in cell order, so a cell's scan reads contiguous memory
   std::vector<std::uint8_t> infeasible;    // per agent: the first pass found no permitted velocity
   std::vector<float> first_vx, first_vz;   // the first pass's velocities, read by the second
+  // The first pass's chosen neighbours of each agent it left infeasible (max_neighbors slots per agent, packed
+  // (squared distance, index) keys as the search keeps them, and their count): the second pass solves those agents
+  // again from the same positions, so it reads them instead of searching the grid again.
+  std::vector<std::uint64_t> kept_neighbors;
+  std::vector<std::uint32_t> kept_count;
 };
 
 struct AvoidanceJob {
