@@ -274,43 +274,79 @@ vec2 separation_direction(std::uint32_t self, std::uint32_t other) {
   return self == lo ? -pair : pair;
 }
 
-// How much more than half of the avoidance between i and j agent i takes (AvoidanceParameters::right_of_way):
-// positive when j is ahead of it on their common way, 0 unless both prefer to move within 60 deg of each other.
-// Exactly the negation of j's (pj - pi and pi - pj, pref_i + pref_j in either order, round alike), so the two
-// shares add up to 1 (to the rounding of 0.5 + s). Rejected, over four bottleneck seeds: the heading test at 90 deg
-// (89 % in after 240 s on average against 94 %), and the shift gated on both moving slower than they want (91.5 %,
-// and 2 of 4 crossing runs left an agent short of its goal).
-float right_of_way_shift(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j) {
-  const vec2 ai(job.pref_vx[i], job.pref_vz[i]), aj(job.pref_vx[j], job.pref_vz[j]);
-  const float li = length_squared(ai), lj = length_squared(aj);
-  constexpr float kMinPreferred2 = 1e-4f;  // (1 cm/s)^2: an agent that wants to stand has no way to lead on
-  constexpr float kCosSameWay = 0.5f;      // 60 deg
-  const float along = dot2(ai, aj);  // within 60 deg: along > 0 and along^2 > cos^2 li lj (no square root)
-  if (!(li > kMinPreferred2 && lj > kMinPreferred2) || along <= 0.0f ||
-      along * along <= kCosSameWay * kCosSameWay * li * lj)
-    return 0.0f;
-  const vec2 way = ai + aj;
-  const vec2 rel_p(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
-  const float along_way = dot2(rel_p, way), radii = job.radius[i] + job.radius[j], way2 = length_squared(way);
-  // The one ahead moving back along the way loses its right of way (right_of_way_back_fade). Both agents of the
-  // pair compute the same leader (along_way only changes sign between them, and `way` is the same sum), from the
-  // same velocity, so their shifts stay each other's negation.
-  float row = job.params.right_of_way;
-  if (job.params.right_of_way_back_fade > 0.0f && along_way != 0.0f) {
-    const std::uint32_t leader = along_way > 0.0f ? j : i;
-    const float back = -dot2(vec2(job.vx[leader], job.vz[leader]), way);
-    if (back > 0.0f) {
-      const float back_speed = back / std::sqrt(way2);
-      row *= std::max(0.0f, 1.0f - back_speed / job.params.right_of_way_back_fade);
-    }
+// What agent i's pair computations read of its neighbours, gathered once per agent (SoA, in the neighbours'
+// order): the right of way and the passing side run branch-free over these in loops the compiler vectorises. As
+// per-pair functions with early exits they were a fifth of the job at the crowds' settings (perf and a cycle
+// count per agent on the benchmark's crowd: whether two agents go the same way or meet head-on is a coin toss
+// in a mixed crowd, and so were the branches). Every value is computed as the per-pair code did, in the same
+// order, and selected: the same bits.
+struct NeighbourBatch {
+  std::uint32_t count = 0;
+  std::array<float, kAvoidanceMaxNeighbors> rel_x, rel_z;    // p_j - p_i
+  std::array<float, kAvoidanceMaxNeighbors> wish_x, wish_z;  // j's preferred velocity
+  std::array<float, kAvoidanceMaxNeighbors> vel_x, vel_z;    // j's current velocity
+  std::array<float, kAvoidanceMaxNeighbors> radii;           // r_i + r_j
+  std::array<std::uint8_t, kAvoidanceMaxNeighbors> held;     // j holds still this step (AvoidanceJob::holds)
+};
+
+void gather_neighbours(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t count,
+                       NeighbourBatch& b) {
+  b.count = count;
+  const bool any_holds = !job.holds.empty();
+  for (std::uint32_t k = 0; k < count; ++k) {
+    const std::uint32_t j = neighbours[k].index();
+    b.rel_x[k] = job.px[j] - job.px[i];
+    b.rel_z[k] = job.pz[j] - job.pz[i];
+    b.wish_x[k] = job.pref_vx[j];
+    b.wish_z[k] = job.pref_vz[j];
+    b.vel_x[k] = job.vx[j];
+    b.vel_z[k] = job.vz[j];
+    b.radii[k] = job.radius[i] + job.radius[j];
+    b.held[k] = any_holds && job.holds[j] != 0 ? 1 : 0;
   }
-  // Most neighbours are more than the radii's sum ahead or behind: the clamp below would give exactly +-1, so the
-  // square root and the division are skipped (the margin is far above their rounding: the same bits either way).
-  if (along_way * along_way > 1.001f * way2 * radii * radii)
-    return along_way > 0.0f ? row : -row;
-  const float way_length = std::sqrt(way2);  // > 0: the two are within 60 deg
-  const float ahead = along_way / (way_length * radii);
-  return row * std::clamp(ahead, -1.0f, 1.0f);
+}
+
+// How much more than half of the avoidance between i and each neighbour j agent i takes
+// (AvoidanceParameters::right_of_way), into shift[0..count): positive when j is ahead of it on their common way, 0
+// unless both prefer to move within 60 deg of each other. Exactly the negation of j's (pj - pi and pi - pj,
+// pref_i + pref_j in either order, round alike), so the two shares add up to 1 (to the rounding of 0.5 + s).
+// Rejected, over four bottleneck seeds: the heading test at 90 deg (89 % in after 240 s on average against 94 %),
+// and the shift gated on both moving slower than they want (91.5 %, and 2 of 4 crossing runs left an agent short of
+// its goal).
+void right_of_way_shifts(const AvoidanceJob& job, std::uint32_t i, const NeighbourBatch& b, float* shift) {
+  const float aix = job.pref_vx[i], aiz = job.pref_vz[i];
+  const float vix = job.vx[i], viz = job.vz[i];
+  const float li = aix * aix + aiz * aiz;
+  constexpr float kMinPreferred2 = 1e-4f;  // (1 cm/s)^2: an agent that wants to stand has no way to lead on
+  constexpr float kCosSameWay2 = 0.5f * 0.5f;  // 60 deg
+  const float row = job.params.right_of_way, fade = job.params.right_of_way_back_fade;
+  const bool lead_on = li > kMinPreferred2;
+  for (std::uint32_t k = 0; k < b.count; ++k) {
+    const float ajx = b.wish_x[k], ajz = b.wish_z[k];
+    const float lj = ajx * ajx + ajz * ajz;
+    // Within 60 deg: along > 0 and along^2 > cos^2 li lj (no square root).
+    const float along = aix * ajx + aiz * ajz;
+    const bool same_way = lead_on & (lj > kMinPreferred2) & (along > 0.0f) & (along * along > kCosSameWay2 * li * lj);
+    const float way_x = aix + ajx, way_z = aiz + ajz;
+    const float along_way = b.rel_x[k] * way_x + b.rel_z[k] * way_z;
+    const float radii = b.radii[k];
+    const float way2 = way_x * way_x + way_z * way_z;
+    const float way_length = std::sqrt(way2);  // > 0 where it is used: the two are within 60 deg
+    // The one ahead moving back along the way loses its right of way (right_of_way_back_fade). Both agents of the
+    // pair compute the same leader (along_way only changes sign between them, and `way` is the same sum), from the
+    // same velocity, so their shifts stay each other's negation.
+    const bool j_leads = along_way > 0.0f;
+    const float vjx = b.vel_x[k], vjz = b.vel_z[k];  // loaded either way: a load in one arm only blocks the select
+    const float back = -((j_leads ? vjx : vix) * way_x + (j_leads ? vjz : viz) * way_z);
+    const bool fading = (fade > 0.0f) & (along_way != 0.0f) & (back > 0.0f);
+    const float faded = row * std::max(0.0f, 1.0f - (back / way_length) / fade);
+    const float lead = fading ? faded : row;
+    // Most neighbours are more than the radii's sum ahead or behind: the clamp gives exactly +-1 there.
+    const bool beyond = along_way * along_way > 1.001f * way2 * radii * radii;
+    const float ahead = std::clamp(along_way / (way_length * radii), -1.0f, 1.0f);
+    const float value = beyond ? (j_leads ? lead : -lead) : lead * ahead;
+    shift[k] = same_way ? value : 0.0f;
+  }
 }
 
 // Agent i's half-plane against neighbour j (the paper's ORCA_{i|j}): u is the smallest change of the relative
@@ -325,6 +361,7 @@ struct FirstPass {
 // `first` null: the ordinary ORCA half-plane from the current velocities, each side taking half. Otherwise (the
 // second pass): from both agents' first-pass velocities; a neighbour whose first pass succeeded keeps its answer,
 // so this agent takes the whole of the avoidance against it; one that failed too recomputes, so the half again.
+// `right_of_way_shift` is this pair's from right_of_way_shifts, added to the half in the first pass.
 // 1 / time_horizon and 1 / dt, divided once per agent rather than per pair.
 struct Inverses {
   float tau, dt;
@@ -332,7 +369,7 @@ struct Inverses {
 };
 
 HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j, const FirstPass* first,
-                      const Inverses& inverse) {
+                      const Inverses& inverse, float right_of_way_shift) {
   const AvoidanceParameters& prm = job.params;
   const vec2 pi(job.px[i], job.pz[i]), pj(job.px[j], job.pz[j]);
   const vec2 vi = first ? vec2(first->vx[i], first->vz[i]) : vec2(job.vx[i], job.vz[i]);
@@ -345,7 +382,7 @@ HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j,
     vj = vec2(0.0f);
     share = 1.0f;
   } else if (!first && prm.right_of_way > 0.0f) {
-    share += right_of_way_shift(job, i, j);
+    share += right_of_way_shift;
   }
   const vec2 rel_p = pj - pi;
   const vec2 rel_v = vi - vj;
@@ -543,7 +580,7 @@ vec2 make_way_direction(const AvoidanceJob& job, std::uint32_t i, const Nearest*
 // share of the angle that any head-on neighbour on a collision course calls for. Reads this step's
 // inputs only (positions, preferred velocities), so it is the same in the parallel job, the scalar twin and across
 // processes.
-vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t count) {
+vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const NeighbourBatch& b) {
   const AvoidanceParameters& prm = job.params;
   const vec2 preferred(job.pref_vx[i], job.pref_vz[i]);
   const float pref2 = length_squared(preferred);
@@ -553,31 +590,28 @@ vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Nearest* 
   const vec2 way = preferred / pref_length;
   const vec2 right(-way.y, way.x);  // the agent's right with y up (way x up)
   const float side = prm.passing_angle > 0.0f ? 1.0f : -1.0f;
-  // Every neighbour's test is computed in full and selected rather than branched on: whether a neighbour comes
-  // head-on is a coin toss in a mixed crowd, and the early exits' mispredictions made this loop 9 % of the
-  // avoidance job at the crowds' settings (perf, BM_AvoidanceCrowds' crowd). Same arithmetic, same bits.
-  float share = 0.0f;
-  const bool any_holds = !job.holds.empty();
-  for (std::uint32_t k = 0; k < count; ++k) {
-    const std::uint32_t j = neighbours[k].index();
-    const vec2 wish(job.pref_vx[j], job.pref_vz[j]);
-    const float wish2 = length_squared(wish);
-    const float facing = dot2(wish, way);  // head-on: over 120 deg apart, cos < -0.5 (no square root)
-    const vec2 rel(job.px[j] - job.px[i], job.pz[j] - job.pz[i]);
-    const float along = dot2(rel, way);
-    const float r = job.radius[i] + job.radius[j];
+  // Each neighbour's share computed in full and selected (see NeighbourBatch), the largest taken after.
+  std::array<float, kAvoidanceMaxNeighbors> shares;
+  for (std::uint32_t k = 0; k < b.count; ++k) {
+    const float wx = b.wish_x[k], wz = b.wish_z[k];
+    const float wish2 = wx * wx + wz * wz;
+    const float facing = wx * way.x + wz * way.y;  // head-on: over 120 deg apart, cos < -0.5 (no square root)
+    const float rx = b.rel_x[k], rz = b.rel_z[k];
+    const float along = rx * way.x + rz * way.y;
+    const float r = b.radii[k];
     // On a collision course: less than the radii's sum plus the margin across its way, on either side. (Turning
     // only where the other is not already on the passing side, so as never to turn towards it, kept the 500-agent
     // circle's jam less of a roundabout: 143 agents stuck on average over three seeds against 127; 1,000: 282
     // against 132-133.) A standing neighbour is avoided where it is: no side to agree on.
-    const bool head_on = (wish2 > kMinWish2) & (facing < 0.0f) & (facing * facing > 0.25f * wish2) &
-                         (along > 0.0f) & (std::abs(dot2(rel, right)) < r + prm.passing_margin) &
-                         !(any_holds && job.holds[j] != 0);
+    const bool head_on = (wish2 > kMinWish2) & (facing < 0.0f) & (facing * facing > 0.25f * wish2) & (along > 0.0f) &
+                         (std::abs(rx * right.x + rz * right.y) < r + prm.passing_margin) & (b.held[k] == 0);
     // Full with passing_full_gap or less between the bodies along its way, none at neighbor_distance.
     const float fade = prm.neighbor_distance - r - prm.passing_full_gap;
     const float full = fade > 0.0f ? std::clamp((prm.neighbor_distance - along) / fade, 0.0f, 1.0f) : 1.0f;
-    share = std::max(share, head_on ? full : 0.0f);
+    shares[k] = head_on ? full : 0.0f;
   }
+  float share = 0.0f;
+  for (std::uint32_t k = 0; k < b.count; ++k) share = std::max(share, shares[k]);
   if (share == 0.0f) return preferred;
   const float angle = std::abs(prm.passing_angle) * share;
   return pref_length * (std::cos(angle) * way + side * std::sin(angle) * right);
@@ -596,11 +630,18 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   const std::size_t hard = obstacle_planes(job, i, for_each_edge, planes.data());
   std::size_t count = hard;
   const Inverses inverse(job.params);
+  // The pair rules (right of way, passing side) read the neighbours gathered; the paper's halves need neither.
+  const bool right_of_way = !first && job.params.right_of_way > 0.0f;
+  NeighbourBatch batch;
+  if (right_of_way || job.params.passing_angle != 0.0f) gather_neighbours(job, i, neighbours, neighbour_count, batch);
+  std::array<float, kAvoidanceMaxNeighbors> shift;
+  if (right_of_way) right_of_way_shifts(job, i, batch, shift.data());
+  else std::fill_n(shift.begin(), neighbour_count, 0.0f);
   for (std::uint32_t k = 0; k < neighbour_count; ++k)
-    planes[count++] = agent_plane(job, i, neighbours[k].index(), first, inverse);
+    planes[count++] = agent_plane(job, i, neighbours[k].index(), first, inverse, shift[k]);
 
   const float max_speed = job.max_speed[i];
-  const vec2 preferred = passing_preferred(job, i, neighbours, neighbour_count);
+  const vec2 preferred = passing_preferred(job, i, batch);
   vec2 result;
   const std::size_t failed = solve_2d(planes.data(), count, max_speed, preferred, false, result);
   infeasible = failed < count;
