@@ -128,12 +128,7 @@ void set_scenario(Crowd& crowd, const Scenario& scenario, const ScenarioSetup& s
   std::vector<std::vector<glm::vec2>> polygons;
   for (const ScenarioPolygon& p : scenario.obstacles) polygons.push_back(p.points);
   agents->obstacles = std::make_unique<ObstacleSet>(polygons);
-  agents->move.turn_rate = m.style.turn_rate;
-  agents->move.turn_in_place_rate = m.style.turn_in_place_rate;
-  agents->move.acceleration = m.style.agent_acceleration;
-  agents->move.braking = m.style.agent_braking;
-  agents->move.face_velocity_speed = m.style.face_velocity_speed;
-  agents->move.face_side_angle = m.style.face_side_angle;
+  agents->move = AgentMoveParameters::of(m.style);
   m.source = MotionSource::Walk;
   const CrowdAgents& a = *agents;
   crowd.agents = std::move(agents);

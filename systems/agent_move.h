@@ -23,6 +23,7 @@
 #include <glm/vec2.hpp>
 
 #include "ecs/column_view.h"
+#include "systems/locomotion.h"
 
 namespace strata {
 
@@ -59,18 +60,30 @@ glm::vec2 facing_direction(glm::vec2 velocity, glm::vec2 preferred, glm::vec2 to
                            float side_angle);
 
 struct AgentMoveParameters {
-  // The walk's GaitStyle::turn_rate, turn_in_place_rate, agent_acceleration and agent_braking (the walk predicts
-  // footprints with them).
-  float turn_rate = 1.4f;      // rad/s, walking
-  float turn_in_place_rate = 1.0f;  // rad/s, standing
-  float acceleration = 1.2f;   // m/s^2 when speeding up
-  float braking = 1.5f;        // m/s^2 when slowing down
-  float start_speed = 0.15f;   // m/s a standing body may start at (above GaitStyle::stand_speed)
-  float progress_step = 0.25f; // m: coming this much nearer the goal counts as progress
+  // The walk's own values (GaitStyle), which the walk predicts footprints and turns the body with: a crowd takes
+  // them from its style (of() below), and the defaults are GaitStyle's defaults, so there is one source for each.
+  float turn_rate = GaitStyle{}.turn_rate;                    // rad/s, walking
+  float turn_in_place_rate = GaitStyle{}.turn_in_place_rate;  // rad/s, standing
+  float acceleration = GaitStyle{}.agent_acceleration;        // m/s^2 when speeding up
+  float braking = GaitStyle{}.agent_braking;                  // m/s^2 when slowing down
   // facing_direction: from this speed (m/s) a body carried within face_side_angle (rad) of where it wants to go
   // faces its velocity.
-  float face_velocity_speed = 0.4f;
-  float face_side_angle = 1.2f;
+  float face_velocity_speed = GaitStyle{}.face_velocity_speed;
+  float face_side_angle = GaitStyle{}.face_side_angle;
+  float start_speed = 0.15f;   // m/s a standing body may start at (above GaitStyle::stand_speed)
+  float progress_step = 0.25f; // m: coming this much nearer the goal counts as progress
+
+  // The walk's values of `style`, the rest as above. A test or tool that changes the style re-derives these.
+  static AgentMoveParameters of(const GaitStyle& style) {
+    AgentMoveParameters p;
+    p.turn_rate = style.turn_rate;
+    p.turn_in_place_rate = style.turn_in_place_rate;
+    p.acceleration = style.agent_acceleration;
+    p.braking = style.agent_braking;
+    p.face_velocity_speed = style.face_velocity_speed;
+    p.face_side_angle = style.face_side_angle;
+    return p;
+  }
 };
 
 // The velocity a walking body can take up this step on its way to `wish`: turned from its heading by at most its

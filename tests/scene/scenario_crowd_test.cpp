@@ -150,7 +150,8 @@ TEST(ScenarioCrowd, PlantedFeetHoldTheBodiesInAJam) {
     // Bodies turn into any shove up to 1.6 rad off their way here, as they did before GaitStyle::face_side_angle
     // became 1.2: past 1.2 rad bodies in this jam now keep facing their way and crab, and the slides of both runs
     // are set by that instead (7.4 mm held, 9.0 free; 4.0 and 78.9 mm with 1.6, which isolates what the hold does).
-    crowd->agents->move.face_side_angle = crowd->motion.style.face_side_angle = 1.6f;
+    crowd->motion.style.face_side_angle = 1.6f;
+    crowd->agents->move = AgentMoveParameters::of(crowd->motion.style);
     if (k == 1) crowd->motion.style.lag_dip = 10.0f;  // beyond any leg: no lag, no floor under the pelvis
     o[k] = run(*crowd, 30.0f);
     std::printf("%s: foot slide %.1f mm, lowest pelvis %.3f m, overlaps %llu\n", k == 0 ? "held" : "free",

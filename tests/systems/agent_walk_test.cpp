@@ -50,12 +50,7 @@ struct AgentWalker {
     t.f32(kWalkerGait, kGaitCadence)[0] = c.motion.style.agent_min_cadence;
     t.f32(kWalkerGait, kGaitCadenceTarget)[0] = c.motion.style.agent_min_cadence;
     t.f32(kWalkerGait, kGaitIdle)[0] = 1.0f;
-    move.turn_rate = c.motion.style.turn_rate;
-    move.turn_in_place_rate = c.motion.style.turn_in_place_rate;
-    move.acceleration = c.motion.style.agent_acceleration;
-    move.braking = c.motion.style.agent_braking;
-    move.face_velocity_speed = c.motion.style.face_velocity_speed;
-    move.face_side_angle = c.motion.style.face_side_angle;
+    move = AgentMoveParameters::of(c.motion.style);
     run_or_throw(make_start_walking_job(*c.motion.locomotion, c.motion.paths, t, 0, c.motion.style, true), "start");
     run_or_throw(make_ik_job(c.rig().skeleton, c.motion.locomotion->limbs, t), "ik");
     run_or_throw(make_fk_job(c.rig().skeleton, t), "fk");
@@ -313,7 +308,10 @@ TEST(AgentWalk, ACarriedBodyTurnsToWhereItGoesAndKeepsItsFeet) {
   float heading_after[2] = {0.0f, 0.0f};
   for (int facing = 0; facing < 2; ++facing) {
     AgentWalker w;
-    if (facing == 0) w.move.face_velocity_speed = w.crowd->motion.style.face_velocity_speed = 1e6f;
+    if (facing == 0) {
+      w.crowd->motion.style.face_velocity_speed = 1e6f;
+      w.move = AgentMoveParameters::of(w.crowd->motion.style);
+    }
     GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
     const float dt = 1.0f / 60.0f;
     for (int f = 0; f < 240; ++f) {
