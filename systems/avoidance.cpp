@@ -932,7 +932,21 @@ bool AvoidanceJob::run() const {
     for (int dz = -ring; dz <= ring; ++dz)
       for (int dx = -ring; dx <= ring; ++dx)
         if (std::max(std::abs(dx), std::abs(dz)) == ring) offsets_storage[offset_count++] = CellOffset{dx, dz};
-  const std::span<const CellOffset> offsets(offsets_storage.data(), offset_count);
+  // Four visiting orders, one per quadrant of its own cell the agent stands in: the block's cells by their distance
+  // from that quadrant's centre (ties in ring order), so the list fills with the nearest candidates sooner and
+  // the far cells are culled against a tighter k-th distance. The kept set does not depend on the order.
+  std::array<std::array<CellOffset, 25>, 4> quadrant_orders;
+  for (int q = 0; q < 4; ++q) {
+    const double fx = (q & 1) != 0 ? 0.75 : 0.25, fz = (q & 2) != 0 ? 0.75 : 0.25;  // in cell widths
+    auto distance = [&](const CellOffset& o) {
+      const double ex = std::max(0.0, std::max(o.dx - fx, fx - (o.dx + 1.0)));
+      const double ez = std::max(0.0, std::max(o.dz - fz, fz - (o.dz + 1.0)));
+      return ex * ex + ez * ez;
+    };
+    std::copy_n(offsets_storage.begin(), offset_count, quadrant_orders[q].begin());
+    std::stable_sort(quadrant_orders[q].begin(), quadrant_orders[q].begin() + static_cast<std::ptrdiff_t>(offset_count),
+                     [&](const CellOffset& a, const CellOffset& b) { return distance(a) < distance(b); });
+  }
   // Agent i's nearest neighbours within reach into nearest[0..), sorted by (squared distance, index); returns how
   // many. Cells nearest first (the block's rings), each skipped when even its nearest point is farther than the
   // current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could not enter
@@ -961,13 +975,18 @@ bool AvoidanceJob::run() const {
     // test followed by the list's doubled the mispredictions of one.
     std::uint32_t count = 0;
     float admit = below_reach;
+    // A cell is skipped when even its nearest point is beyond `cull`: the reach, then the list's last distance once
+    // it is full, with a margin for rounding (updated with the list, not recomputed per cell).
+    const auto cull_at = [](float d2) { return static_cast<double>(d2) * (1.0 + 1e-4) + 1e-6; };
+    double cull = cull_at(reach2);
+    const double in_x = static_cast<double>(x) - (g.origin_x + static_cast<double>(cx) * g.cell);
+    const double in_z = static_cast<double>(z) - (g.origin_z + static_cast<double>(cz) * g.cell);
+    const int quadrant = (in_x > 0.5 * g.cell ? 1 : 0) | (in_z > 0.5 * g.cell ? 2 : 0);
+    const std::span<const CellOffset> offsets(quadrant_orders[static_cast<std::size_t>(quadrant)].data(), offset_count);
     for (const CellOffset& o : offsets) {
       const std::int64_t xx = static_cast<std::int64_t>(cx) + o.dx, zz = static_cast<std::int64_t>(cz) + o.dz;
       if (xx < 0 || zz < 0 || xx >= g.cols || zz >= g.rows) continue;
-      const float limit = count < capacity ? reach2 : nearest[count - 1].d2();
-      if (ex2[static_cast<std::size_t>(o.dx + block)] + ez2[static_cast<std::size_t>(o.dz + block)] >
-          static_cast<double>(limit) * (1.0 + 1e-4) + 1e-6)
-        continue;
+      if (ex2[static_cast<std::size_t>(o.dx + block)] + ez2[static_cast<std::size_t>(o.dz + block)] > cull) continue;
       const std::size_t cell = static_cast<std::size_t>(zz) * g.cols + static_cast<std::size_t>(xx);
       for (std::uint32_t k = s.cell_start[cell]; k < s.cell_start[cell + 1]; ++k) {
         const float dx = s.sorted_x[k] - x, dz = s.sorted_z[k] - z;
@@ -983,6 +1002,7 @@ bool AvoidanceJob::run() const {
           keep_nearest(nearest, count, capacity, Nearest{d2, j});
         }
         admit = std::min(below_reach, nearest[count - 1].d2());
+        cull = cull_at(nearest[count - 1].d2());
       }
     }
     if (count < capacity) sort_nearest(nearest, count);
