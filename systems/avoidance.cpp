@@ -18,7 +18,7 @@
 // new built alike, alternated; docs/crowds.md) with the list filled unsorted then sorted once, one admission test
 // per candidate, and the second pass reading the first's neighbour lists; then the pair rules over gathered
 // neighbours, branch-free (NeighbourBatch): the crowds' settings 5.72 ms, halves 4.24 ms against 7.37 / 4.82 for
-// the day's starting code in the same runs.
+// the day's starting code in the same runs; then the search's cells visited nearest-first by quadrant (-2.6 %).
 
 // The half-plane form used throughout: a constraint is {v : dot(v - point, normal) >= 0} with |normal| = 1, the
 // permitted side being where the normal points. The paper and RVO2 describe a line by a point and a direction
