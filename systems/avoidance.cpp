@@ -638,9 +638,8 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   if (right_of_way || job.params.passing_angle != 0.0f) gather_neighbours(job, i, neighbours, neighbour_count, batch);
   std::array<float, kAvoidanceMaxNeighbors> shift;
   if (right_of_way) right_of_way_shifts(job, i, batch, shift.data());
-  else std::fill_n(shift.begin(), neighbour_count, 0.0f);
   for (std::uint32_t k = 0; k < neighbour_count; ++k)
-    planes[count++] = agent_plane(job, i, neighbours[k].index(), first, inverse, shift[k]);
+    planes[count++] = agent_plane(job, i, neighbours[k].index(), first, inverse, right_of_way ? shift[k] : 0.0f);
 
   const float max_speed = job.max_speed[i];
   const vec2 preferred = passing_preferred(job, i, batch);
@@ -948,9 +947,9 @@ bool AvoidanceJob::run() const {
                      [&](const CellOffset& a, const CellOffset& b) { return distance(a) < distance(b); });
   }
   // Agent i's nearest neighbours within reach into nearest[0..), sorted by (squared distance, index); returns how
-  // many. Cells nearest first (the block's rings), each skipped when even its nearest point is farther than the
-  // current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could not enter
-  // the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
+  // many. Cells nearest first (its quadrant's order above), each skipped when even its nearest point is farther
+  // than the current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could
+  // not enter the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
   const float below_reach = std::nextafter(reach2, 0.0f);  // d2 < reach2 <=> d2 <= below_reach
   auto search = [&](std::uint32_t i, float x, float z, Nearest* nearest) {
     const std::uint32_t c = s.agent_cell[i];
