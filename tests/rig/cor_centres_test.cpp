@@ -44,7 +44,7 @@ BodyLevel tube() {
 
 TEST(CorCentres, BlendedVerticesTurnAboutTheAxisNearTheirRing) {
   const BodyLevel b = tube();
-  const CorCentres c = compute_cor_centres(b.mesh, b.binding);
+  const CorCentres c = compute_cor_centres(b.mesh, b.binding, CorOptions{0.1});  // the paper's width
   std::size_t blended = 0;
   for (std::size_t v = 0; v < b.mesh.vertex_count(); ++v) {
     const glm::vec3 p = b.mesh.positions[v], q = c.centres[v];
@@ -60,6 +60,26 @@ TEST(CorCentres, BlendedVerticesTurnAboutTheAxisNearTheirRing) {
   EXPECT_EQ(c.solved, blended);
   EXPECT_EQ(c.fallback, 0u);
   EXPECT_GT(blended, 0u);
+}
+
+// A wider similarity averages a ring's centre over more of the blend, weighted towards its middle (the weight
+// products peak at w = 0.5, here x = 0): every blended ring's centre moves towards x = 0, never past it, and the
+// widths are keyed apart in the cache.
+TEST(CorCentres, WiderSimilarityDrawsCentresTowardsTheBlendsMiddle) {
+  const BodyLevel b = tube();
+  const CorCentres narrow = compute_cor_centres(b.mesh, b.binding, CorOptions{0.1});
+  const CorCentres wide = compute_cor_centres(b.mesh, b.binding, CorOptions{0.5});
+  std::size_t moved = 0;
+  for (std::size_t v = 0; v < b.mesh.vertex_count(); ++v) {
+    if (b.binding.influence_count(v) < 2) continue;
+    const float x = b.mesh.positions[v].x, n = narrow.centres[v].x, w = wide.centres[v].x;
+    EXPECT_LE(std::abs(w), std::abs(n) + 1e-6f) << v;
+    EXPECT_GE(w * x, -1e-6f) << v << ": the centre stays on its ring's side of the middle";
+    EXPECT_LT(std::hypot(wide.centres[v].y, wide.centres[v].z), 1e-3f) << v;
+    moved += std::abs(n) - std::abs(w) > 1e-3f;
+  }
+  EXPECT_GT(moved, 0u);
+  EXPECT_NE(cor_cache_key(b.mesh, b.binding, CorOptions{0.1}), cor_cache_key(b.mesh, b.binding, CorOptions{0.5}));
 }
 
 TEST(CorCentres, SameBytesForOneAndTwoThreads) {
