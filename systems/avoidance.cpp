@@ -18,7 +18,8 @@
 // new built alike, alternated; docs/crowds.md) with the list filled unsorted then sorted once, one admission test
 // per candidate, and the second pass reading the first's neighbour lists; then the pair rules over gathered
 // neighbours, branch-free (NeighbourBatch): the crowds' settings 5.72 ms, halves 4.24 ms against 7.37 / 4.82 for
-// the day's starting code in the same runs; then the search's cells visited nearest-first by quadrant (-2.6 %).
+// the day's starting code in the same runs; then the search's cells visited nearest-first by quadrant (-2.6 %);
+// then the search by rows of cells, distances 16 at a time into a bit mask (crowds' settings -3 to -4 %).
 
 // The half-plane form used throughout: a constraint is {v : dot(v - point, normal) >= 0} with |normal| = 1, the
 // permitted side being where the normal points. The paper and RVO2 describe a line by a point and a direction
@@ -690,10 +691,6 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
 }
 
 // ---- The grid --------------------------------------------------------------------------------------------------
-struct CellOffset {
-  int dx, dz;
-};
-
 struct GridShape {
   double origin_x = 0.0, origin_z = 0.0, cell = 1.0;
   std::uint32_t cols = 1, rows = 1;
@@ -923,33 +920,12 @@ bool AvoidanceJob::run() const {
 
   const float reach2 = params.neighbor_distance * params.neighbor_distance;
   const std::uint32_t capacity = params.max_neighbors;
-  // The block of cells that can hold a neighbour in range, ring by ring.
+  // The block of cells that can hold a neighbour in range: (2 block + 1)^2 around the agent's.
   const int block = g.cell >= params.neighbor_distance ? 1 : 2;
-  std::array<CellOffset, 25> offsets_storage;
-  std::size_t offset_count = 0;
-  for (int ring = 0; ring <= block; ++ring)
-    for (int dz = -ring; dz <= ring; ++dz)
-      for (int dx = -ring; dx <= ring; ++dx)
-        if (std::max(std::abs(dx), std::abs(dz)) == ring) offsets_storage[offset_count++] = CellOffset{dx, dz};
-  // Four visiting orders, one per quadrant of its own cell the agent stands in: the block's cells by their distance
-  // from that quadrant's centre (ties in ring order), so the list fills with the nearest candidates sooner and
-  // the far cells are culled against a tighter k-th distance. The kept set does not depend on the order.
-  std::array<std::array<CellOffset, 25>, 4> quadrant_orders;
-  for (int q = 0; q < 4; ++q) {
-    const double fx = (q & 1) != 0 ? 0.75 : 0.25, fz = (q & 2) != 0 ? 0.75 : 0.25;  // in cell widths
-    auto distance = [&](const CellOffset& o) {
-      const double ex = std::max(0.0, std::max(o.dx - fx, fx - (o.dx + 1.0)));
-      const double ez = std::max(0.0, std::max(o.dz - fz, fz - (o.dz + 1.0)));
-      return ex * ex + ez * ez;
-    };
-    std::copy_n(offsets_storage.begin(), offset_count, quadrant_orders[q].begin());
-    std::stable_sort(quadrant_orders[q].begin(), quadrant_orders[q].begin() + static_cast<std::ptrdiff_t>(offset_count),
-                     [&](const CellOffset& a, const CellOffset& b) { return distance(a) < distance(b); });
-  }
   // Agent i's nearest neighbours within reach into nearest[0..), sorted by (squared distance, index); returns how
-  // many. Cells nearest first (its quadrant's order above), each skipped when even its nearest point is farther
-  // than the current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could
-  // not enter the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
+  // many. The block's rows nearest first, each row's cells skipped when even their nearest point is farther than
+  // the current k-th neighbour: once the list is full the search shrinks to it. Only candidates that could not
+  // enter the list are skipped (the margin covers rounding), so the kept set is the brute-force one.
   const float below_reach = std::nextafter(reach2, 0.0f);  // d2 < reach2 <=> d2 <= below_reach
   auto search = [&](std::uint32_t i, float x, float z, Nearest* nearest) {
     const std::uint32_t c = s.agent_cell[i];
@@ -978,30 +954,60 @@ bool AvoidanceJob::run() const {
     // it is full, with a margin for rounding (updated with the list, not recomputed per cell).
     const auto cull_at = [](float d2) { return static_cast<double>(d2) * (1.0 + 1e-4) + 1e-6; };
     double cull = cull_at(reach2);
-    const double in_x = static_cast<double>(x) - (g.origin_x + static_cast<double>(cx) * g.cell);
     const double in_z = static_cast<double>(z) - (g.origin_z + static_cast<double>(cz) * g.cell);
-    const int quadrant = (in_x > 0.5 * g.cell ? 1 : 0) | (in_z > 0.5 * g.cell ? 2 : 0);
-    const std::span<const CellOffset> offsets(quadrant_orders[static_cast<std::size_t>(quadrant)].data(), offset_count);
-    for (const CellOffset& o : offsets) {
-      const std::int64_t xx = static_cast<std::int64_t>(cx) + o.dx, zz = static_cast<std::int64_t>(cz) + o.dz;
-      if (xx < 0 || zz < 0 || xx >= g.cols || zz >= g.rows) continue;
-      if (ex2[static_cast<std::size_t>(o.dx + block)] + ez2[static_cast<std::size_t>(o.dz + block)] > cull) continue;
-      const std::size_t cell = static_cast<std::size_t>(zz) * g.cols + static_cast<std::size_t>(xx);
-      for (std::uint32_t k = s.cell_start[cell]; k < s.cell_start[cell + 1]; ++k) {
-        const float dx = s.sorted_x[k] - x, dz = s.sorted_z[k] - z;
-        const float d2 = dx * dx + dz * dz;
-        if (!(d2 <= admit)) continue;
-        const std::uint32_t j = s.cell_agents[k];
-        if (j == i) continue;
-        if (count < capacity) {
-          nearest[count++] = Nearest{d2, j};
-          if (count < capacity) continue;
-          sort_nearest(nearest, count);
-        } else {
-          keep_nearest(nearest, count, capacity, Nearest{d2, j});
+    const int near_side = in_z > 0.5 * g.cell ? 1 : -1;
+    // Row by row, the agent's own first, then the nearer neighbouring row (by the rows' distances): a row's cells
+    // in the block are contiguous in cell order, so its candidates are one run of sorted_x/z, trimmed at both ends
+    // to the columns not culled when the row starts. Their distances are computed 16 at a time (vectorised) and
+    // compared with `admit` into a bit mask; only the set bits are visited, each checked again against the list
+    // as it shrinks. Measured against cells visited one by one, nearest first in one of four orders by the
+    // agent's quadrant, with a branch per candidate (10,000 agents, two threads, both built with the library's
+    // flags, alternated, medians of 6, 2026-11-28): the crowds' settings 5.82 -> 5.63 ms (and 6.07 -> 5.80 in a
+    // second round), the paper's halves 4.57 -> 4.42 ms, the same velocities bit for bit. Runs of 32: no different.
+    const int row_order[5] = {0, near_side, -near_side, 2 * near_side, -2 * near_side};
+    float d2s[16];
+    for (int r = 0; r < 2 * block + 1; ++r) {
+      const int dz = row_order[r];
+      const std::int64_t zz = static_cast<std::int64_t>(cz) + dz;
+      if (zz < 0 || zz >= g.rows) continue;
+      const double rz = ez2[static_cast<std::size_t>(dz + block)];
+      if (rz > cull) continue;
+      std::int64_t lo = std::max<std::int64_t>(static_cast<std::int64_t>(cx) - block, 0);
+      std::int64_t hi = std::min<std::int64_t>(static_cast<std::int64_t>(cx) + block, g.cols - 1);
+      const auto column_far = [&](std::int64_t xx) {
+        return ex2[static_cast<std::size_t>(xx - static_cast<std::int64_t>(cx) + block)] + rz > cull;
+      };
+      while (lo <= hi && column_far(lo)) ++lo;
+      while (hi >= lo && column_far(hi)) --hi;
+      if (lo > hi) continue;
+      const std::size_t row = static_cast<std::size_t>(zz) * g.cols;
+      const std::uint32_t begin = s.cell_start[row + static_cast<std::size_t>(lo)];
+      const std::uint32_t end = s.cell_start[row + static_cast<std::size_t>(hi) + 1];
+      for (std::uint32_t base = begin; base < end; base += 16) {
+        const std::uint32_t m = std::min<std::uint32_t>(16, end - base);
+        std::uint32_t bits = 0;
+        for (std::uint32_t k = 0; k < m; ++k) {
+          const float dx = s.sorted_x[base + k] - x, dz2 = s.sorted_z[base + k] - z;
+          d2s[k] = dx * dx + dz2 * dz2;
         }
-        admit = std::min(below_reach, nearest[count - 1].d2());
-        cull = cull_at(nearest[count - 1].d2());
+        for (std::uint32_t k = 0; k < m; ++k) bits |= static_cast<std::uint32_t>(d2s[k] <= admit) << k;
+        while (bits != 0) {
+          const std::uint32_t k = static_cast<std::uint32_t>(std::countr_zero(bits));
+          bits &= bits - 1;
+          const float d2 = d2s[k];
+          if (!(d2 <= admit)) continue;
+          const std::uint32_t j = s.cell_agents[base + k];
+          if (j == i) continue;
+          if (count < capacity) {
+            nearest[count++] = Nearest{d2, j};
+            if (count < capacity) continue;
+            sort_nearest(nearest, count);
+          } else {
+            keep_nearest(nearest, count, capacity, Nearest{d2, j});
+          }
+          admit = std::min(below_reach, nearest[count - 1].d2());
+          cull = cull_at(nearest[count - 1].d2());
+        }
       }
     }
     if (count < capacity) sort_nearest(nearest, count);
