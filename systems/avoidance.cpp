@@ -211,8 +211,43 @@ bool closer(const Nearest& a, const Nearest& b) { return a.key < b.key; }
   if (count < capacity) ++count;
 }
 
-// Sorts items[0..count) by key, ascending.
+// Sorts items[0..count) by key, ascending. Twelve (the default max_neighbors, the list's usual size when it
+// fills) through a sorting network, branch-free: 39 compare-exchanges in 9 layers (the smallest known for 12,
+// checked below). std::sort's insertion sort of 12 random keys mispredicted its inner loop's exit at nearly every
+// key: perf put a fifth of the neighbour search there. 10,000 agents, two threads, alternated builds, medians of 6 (2026-11-28): the
+// crowds' settings 5.43 -> 5.20 ms, the paper's halves 4.42 -> 4.09 ms, the same velocities bit for bit.
+inline constexpr std::array<std::array<std::uint8_t, 2>, 39> kSortTwelve{{
+    {0, 8}, {1, 7}, {2, 6}, {3, 11}, {4, 10}, {5, 9},  {0, 1}, {2, 5}, {3, 4}, {6, 9}, {7, 8}, {10, 11}, {0, 2},
+    {1, 6}, {5, 10}, {9, 11}, {0, 3}, {1, 2}, {4, 6}, {5, 7}, {8, 11}, {9, 10}, {1, 4}, {3, 5}, {6, 8}, {7, 10},
+    {1, 3}, {2, 5}, {6, 9}, {8, 10}, {2, 3}, {4, 5}, {6, 7}, {8, 9}, {4, 6}, {5, 7}, {3, 4}, {5, 6}, {7, 8}}};
+
+// The 0-1 principle: a comparator network that sorts every sequence of zeros and ones sorts every sequence.
+// Checked when compiling (4,096 inputs), so a mistyped comparator cannot build.
+constexpr bool sorts_every_zero_one_input() {
+  for (std::uint32_t input = 0; input < (1u << 12); ++input) {
+    std::array<std::uint32_t, 12> bit{};
+    for (std::uint32_t i = 0; i < 12; ++i) bit[i] = (input >> i) & 1u;
+    for (const auto& c : kSortTwelve)
+      if (bit[c[0]] > bit[c[1]]) std::swap(bit[c[0]], bit[c[1]]);
+    for (std::uint32_t i = 1; i < 12; ++i)
+      if (bit[i - 1] > bit[i]) return false;
+  }
+  return true;
+}
+static_assert(sorts_every_zero_one_input(), "kSortTwelve is not a sorting network");
+
 void sort_nearest(Nearest* items, std::uint32_t count) {
+  if (count == 12) {
+    std::uint64_t k[12];
+    for (int i = 0; i < 12; ++i) k[i] = items[i].key;
+    for (const auto& [a, b] : kSortTwelve) {
+      const std::uint64_t lo = k[a] < k[b] ? k[a] : k[b], hi = k[a] < k[b] ? k[b] : k[a];
+      k[a] = lo;
+      k[b] = hi;
+    }
+    for (int i = 0; i < 12; ++i) items[i].key = k[i];
+    return;
+  }
   std::sort(items, items + count, closer);
 }
 
