@@ -217,8 +217,9 @@ bool closer(const Nearest& a, const Nearest& b) { return a.key < b.key; }
 // Sorts items[0..count) by key, ascending. Twelve (the default max_neighbors, the list's usual size when it
 // fills) through a sorting network, branch-free: 39 compare-exchanges in 9 layers (the smallest known for 12,
 // checked below). std::sort's insertion sort of 12 random keys mispredicted its inner loop's exit at nearly every
-// key: perf put a fifth of the neighbour search there. 10,000 agents, two threads, alternated builds, medians of 6 (2026-11-28): the
-// crowds' settings 5.43 -> 5.20 ms, the paper's halves 4.42 -> 4.09 ms, the same velocities bit for bit.
+// key: perf put a fifth of the neighbour search there. 10,000 agents, two threads, alternated builds, medians of
+// 6 (2026-11-28): the crowds' settings 5.43 -> 5.20 ms, the paper's halves 4.42 -> 4.09 ms, the same velocities
+// bit for bit.
 inline constexpr std::array<std::array<std::uint8_t, 2>, 39> kSortTwelve{{
     {0, 8}, {1, 7}, {2, 6}, {3, 11}, {4, 10}, {5, 9},  {0, 1}, {2, 5}, {3, 4}, {6, 9}, {7, 8}, {10, 11}, {0, 2},
     {1, 6}, {5, 10}, {9, 11}, {0, 3}, {1, 2}, {4, 6}, {5, 7}, {8, 11}, {9, 10}, {1, 4}, {3, 5}, {6, 8}, {7, 10},
@@ -731,6 +732,7 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
 // ---- The grid --------------------------------------------------------------------------------------------------
 // Candidates the search takes at a time from a row's run (a mask of 16 bits; 32 measured no different).
 inline constexpr std::uint32_t kSearchRun = 16;
+static_assert(kSearchRun % 4 == 0 && kSearchRun <= 32, "whole SSE2 vectors, and a mask that fits 32 bits");
 
 struct GridShape {
   double origin_x = 0.0, origin_z = 0.0, cell = 1.0;
@@ -1036,9 +1038,9 @@ bool AvoidanceJob::run() const {
         {
           const __m128 ax = _mm_set1_ps(x), az = _mm_set1_ps(z), limit = _mm_set1_ps(admit);
           for (std::uint32_t k = 0; k < m; k += 4) {
-            const __m128 dx = _mm_sub_ps(_mm_loadu_ps(s.sorted_x.data() + base + k), ax);
-            const __m128 dz = _mm_sub_ps(_mm_loadu_ps(s.sorted_z.data() + base + k), az);
-            const __m128 d2 = _mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dz, dz));
+            const __m128 ox = _mm_sub_ps(_mm_loadu_ps(s.sorted_x.data() + base + k), ax);
+            const __m128 oz = _mm_sub_ps(_mm_loadu_ps(s.sorted_z.data() + base + k), az);
+            const __m128 d2 = _mm_add_ps(_mm_mul_ps(ox, ox), _mm_mul_ps(oz, oz));
             _mm_storeu_ps(d2s + k, d2);
             bits |= static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmple_ps(d2, limit))) << k;
           }
@@ -1046,8 +1048,8 @@ bool AvoidanceJob::run() const {
         }
 #else
         for (std::uint32_t k = 0; k < m; ++k) {
-          const float dx = s.sorted_x[base + k] - x, dz2 = s.sorted_z[base + k] - z;
-          d2s[k] = dx * dx + dz2 * dz2;
+          const float ox = s.sorted_x[base + k] - x, oz = s.sorted_z[base + k] - z;
+          d2s[k] = ox * ox + oz * oz;
         }
         for (std::uint32_t k = 0; k < m; ++k) bits |= static_cast<std::uint32_t>(d2s[k] <= admit) << k;
 #endif
