@@ -226,16 +226,25 @@ inline constexpr std::array<std::array<std::uint8_t, 2>, 39> kSortTwelve{{
     {1, 3}, {2, 5}, {6, 9}, {8, 10}, {2, 3}, {4, 5}, {6, 7}, {8, 9}, {4, 6}, {5, 7}, {3, 4}, {5, 6}, {7, 8}}};
 
 // The 0-1 principle: a comparator network that sorts every sequence of zeros and ones sorts every sequence.
-// Checked when compiling (4,096 inputs), so a mistyped comparator cannot build.
+// Checked when compiling, so a mistyped comparator cannot build: all 4,096 inputs at once, one bit per input
+// (wire[i][w] bit b: input 64 w + b has a one on wire i), a compare-exchange being AND (the min) and OR (the max).
+// Rejected: each input in turn, which passed GCC's constexpr limit but exceeded clang's (1,048,576 steps).
 constexpr bool sorts_every_zero_one_input() {
-  for (std::uint32_t input = 0; input < (1u << 12); ++input) {
-    std::array<std::uint32_t, 12> bit{};
-    for (std::uint32_t i = 0; i < 12; ++i) bit[i] = (input >> i) & 1u;
-    for (const auto& c : kSortTwelve)
-      if (bit[c[0]] > bit[c[1]]) std::swap(bit[c[0]], bit[c[1]]);
-    for (std::uint32_t i = 1; i < 12; ++i)
-      if (bit[i - 1] > bit[i]) return false;
-  }
+  constexpr std::uint64_t kLowBits[6] = {0xAAAAAAAAAAAAAAAAull, 0xCCCCCCCCCCCCCCCCull, 0xF0F0F0F0F0F0F0F0ull,
+                                         0xFF00FF00FF00FF00ull, 0xFFFF0000FFFF0000ull, 0xFFFFFFFF00000000ull};
+  std::array<std::array<std::uint64_t, 64>, 12> wire{};
+  for (std::uint32_t i = 0; i < 12; ++i)
+    for (std::uint32_t w = 0; w < 64; ++w)
+      wire[i][w] = i < 6 ? kLowBits[i] : (((w >> (i - 6)) & 1u) != 0 ? ~0ull : 0ull);
+  for (const auto& c : kSortTwelve)
+    for (std::uint32_t w = 0; w < 64; ++w) {
+      const std::uint64_t a = wire[c[0]][w], b = wire[c[1]][w];
+      wire[c[0]][w] = a & b;
+      wire[c[1]][w] = a | b;
+    }
+  for (std::uint32_t i = 1; i < 12; ++i)
+    for (std::uint32_t w = 0; w < 64; ++w)
+      if ((wire[i - 1][w] & ~wire[i][w]) != 0) return false;  // a one above a zero: unsorted
   return true;
 }
 static_assert(sorts_every_zero_one_input(), "kSortTwelve is not a sorting network");
