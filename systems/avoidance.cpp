@@ -654,12 +654,14 @@ vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Neighbour
     // only where the other is not already on the passing side, so as never to turn towards it, kept the 500-agent
     // circle's jam less of a roundabout: 143 agents stuck on average over three seeds against 127; 1,000: 282
     // against 132-133.) A standing neighbour is avoided where it is: no side to agree on.
-    const bool head_on = (wish2 > kMinWish2) & (facing < 0.0f) & (facing * facing > 0.25f * wish2) & (along > 0.0f) &
-                         (std::abs(rx * right.x + rz * right.y) < r + prm.passing_margin) & (b.held[k] == 0);
+    // Bitwise on ints, not &&: every test evaluated, no branch (clang warns on & between bools).
+    const int head_on = int(wish2 > kMinWish2) & int(facing < 0.0f) & int(facing * facing > 0.25f * wish2) &
+                        int(along > 0.0f) & int(std::abs(rx * right.x + rz * right.y) < r + prm.passing_margin) &
+                        int(b.held[k] == 0);
     // Full with passing_full_gap or less between the bodies along its way, none at neighbor_distance.
     const float fade = prm.neighbor_distance - r - prm.passing_full_gap;
     const float full = fade > 0.0f ? std::clamp((prm.neighbor_distance - along) / fade, 0.0f, 1.0f) : 1.0f;
-    shares[k] = head_on ? full : 0.0f;
+    shares[k] = head_on != 0 ? full : 0.0f;
   }
   float share = 0.0f;
   for (std::uint32_t k = 0; k < b.count; ++k) share = std::max(share, shares[k]);
