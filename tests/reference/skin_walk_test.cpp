@@ -66,9 +66,9 @@ TEST(SkinWalk, TheShippedBodyKeepsEveryTriangleInEveryMode) {
   }
 }
 
-// Issue 19's bend: the shipped body's left elbow and knee flexed 120 deg. Dual quaternions keep both within 5 % of
-// their volume and centres of rotation the elbow (its knee, whose wider blend its centres' linear placement
-// shortens, within 10 %), where linear blending loses a fifth or more.
+// Issue 19's bend: the shipped body's left elbow and knee flexed 120 deg. Dual quaternions and centres of rotation
+// keep both within 5 % of their volume (centres with the default similarity width, rig/cor_centres.h: at the
+// paper's 0.1 the knee lost 7.1 %), where linear blending loses a fifth or more.
 TEST(SkinFlexion, TheShippedBodysElbowAndKneeKeepTheirVolumeWithoutLinearBlending) {
   const Skeleton sk = load_default_humanoid().skeleton;
   const Mesh& mesh = shipped_body_levels(ShippedBody::MakeHuman).levels[0];
@@ -84,7 +84,7 @@ TEST(SkinFlexion, TheShippedBodysElbowAndKneeKeepTheirVolumeWithoutLinearBlendin
   EXPECT_NEAR(change(elbow, SkinningMode::DualQuaternion), 0.0, 5.0);
   EXPECT_NEAR(change(knee, SkinningMode::DualQuaternion), 0.0, 5.0);
   EXPECT_NEAR(change(elbow, SkinningMode::CentresOfRotation), 0.0, 5.0);
-  EXPECT_NEAR(change(knee, SkinningMode::CentresOfRotation), 0.0, 10.0);
+  EXPECT_NEAR(change(knee, SkinningMode::CentresOfRotation), 0.0, 5.0);
 }
 
 }  // namespace
