@@ -407,6 +407,10 @@ struct FirstPass {
   const float* vx;
   const float* vz;
   const std::uint8_t* infeasible;
+  // The first pass's preferred velocities (after the passing side) of the agents it left infeasible; null: the
+  // second pass computes them again (the same values).
+  const float* preferred_x = nullptr;
+  const float* preferred_z = nullptr;
 };
 
 // `first` null: the ordinary ORCA half-plane from the current velocities, each side taking half. Otherwise (the
@@ -673,7 +677,8 @@ vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Neighbour
 // Agent i's new velocity from its chosen neighbours (sorted) and obstacle edges.
 template <class ForEachEdge>
 vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t neighbour_count,
-                 const ForEachEdge& for_each_edge, const FirstPass* first, bool& infeasible) {
+                 const ForEachEdge& for_each_edge, const FirstPass* first, bool& infeasible,
+                 vec2* preferred_out = nullptr) {
   if (!job.holds.empty() && job.holds[i] != 0) {  // it stays where it is: its neighbours avoid it wholly
     infeasible = false;
     return job.params.make_way ? make_way_direction(job, i, neighbours, neighbour_count) : vec2(0.0f);
@@ -685,15 +690,19 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   const Inverses inverse(job.params);
   // The pair rules (right of way, passing side) read the neighbours gathered; the paper's halves need neither.
   const bool right_of_way = !first && job.params.right_of_way > 0.0f;
+  const bool preferred_kept = first != nullptr && first->preferred_x != nullptr;
   NeighbourBatch batch;
-  if (right_of_way || job.params.passing_angle != 0.0f) gather_neighbours(job, i, neighbours, neighbour_count, batch);
+  if (right_of_way || (job.params.passing_angle != 0.0f && !preferred_kept))
+    gather_neighbours(job, i, neighbours, neighbour_count, batch);
   std::array<float, kAvoidanceMaxNeighbors> shift;
   if (right_of_way) right_of_way_shifts(job, i, batch, shift.data());
   for (std::uint32_t k = 0; k < neighbour_count; ++k)
     planes[count++] = agent_plane(job, i, neighbours[k].index(), first, inverse, right_of_way ? shift[k] : 0.0f);
 
   const float max_speed = job.max_speed[i];
-  const vec2 preferred = passing_preferred(job, i, batch);
+  const vec2 preferred = preferred_kept ? vec2(first->preferred_x[i], first->preferred_z[i])
+                                        : passing_preferred(job, i, batch);
+  if (preferred_out != nullptr) *preferred_out = preferred;
   vec2 result;
   const std::size_t failed = solve_2d(planes.data(), count, max_speed, preferred, false, result);
   infeasible = failed < count;
@@ -951,6 +960,8 @@ bool AvoidanceJob::run() const {
     s.first_vx.resize(n);
     s.first_vz.resize(n);
     s.kept_count.resize(n);
+    s.kept_preferred_x.resize(n);
+    s.kept_preferred_z.resize(n);
   }
   if (s.kept_neighbors.size() < n * params.max_neighbors) s.kept_neighbors.resize(n * params.max_neighbors);
   // Padded by a run's width: the search reads whole runs of four past a row's last candidate (masked off).
@@ -1112,12 +1123,15 @@ bool AvoidanceJob::run() const {
           if (obstacle_set != nullptr) obstacle_set->for_each_edge_near(p, edge_reach, visit);
         };
         bool infeasible = false;
-        const vec2 v = solve_agent(*this, i, nearest.data(), count, edges, first, infeasible);
+        vec2 preferred(0.0f);
+        const vec2 v = solve_agent(*this, i, nearest.data(), count, edges, first, infeasible, &preferred);
         if (first == nullptr) {
           s.infeasible[i] = infeasible ? 1 : 0;
           if (infeasible) {
             s.kept_count[i] = count;
             for (std::uint32_t k = 0; k < count; ++k) kept[k] = nearest[k].key;
+            s.kept_preferred_x[i] = preferred.x;
+            s.kept_preferred_z[i] = preferred.y;
           }
         }
         new_vx[i] = v.x;
@@ -1136,7 +1150,8 @@ bool AvoidanceJob::run() const {
           s.infeasible.begin() + static_cast<std::ptrdiff_t>(n)) {
     std::copy(new_vx.begin(), new_vx.end(), s.first_vx.begin());
     std::copy(new_vz.begin(), new_vz.end(), s.first_vz.begin());
-    const FirstPass first{s.first_vx.data(), s.first_vz.data(), s.infeasible.data()};
+    const FirstPass first{s.first_vx.data(), s.first_vz.data(), s.infeasible.data(), s.kept_preferred_x.data(),
+                          s.kept_preferred_z.data()};
     pass(&first);
   }
   return true;

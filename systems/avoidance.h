@@ -159,6 +159,9 @@ struct AvoidanceScratch {
   // again from the same positions, so it reads them instead of searching the grid again.
   std::vector<std::uint64_t> kept_neighbors;
   std::vector<std::uint32_t> kept_count;
+  // And its preferred velocity as the passing side turned it (which reads only this step's inputs), so the second
+  // pass neither gathers the neighbours again nor recomputes it.
+  std::vector<float> kept_preferred_x, kept_preferred_z;
 };
 
 struct AvoidanceJob {
