@@ -21,8 +21,8 @@
 // the day's starting code in the same runs; then the search's cells visited nearest-first by quadrant (-2.6 %);
 // then the search by rows of cells, distances 16 at a time into a bit mask (crowds' settings -3 to -4 %), a
 // sorting network for the full list (-4 %), the runs four at a time with SSE2 (-4 %) and the second pass reading
-// the first's preferred velocities (-3 %): against the day's start, alternated, 5.43 -> 4.41 ms and 3.97 -> 3.27 ms
-// (halves, before the last step), the same velocities bit for bit throughout.
+// the first's preferred velocities (-3 %): against the day's start, alternated before the last step, 5.43 -> 4.60
+// ms at the crowds' settings and 3.97 -> 3.27 ms with halves; the same velocities bit for bit throughout.
 
 // The half-plane form used throughout: a constraint is {v : dot(v - point, normal) >= 0} with |normal| = 1, the
 // permitted side being where the normal points. The paper and RVO2 describe a line by a point and a direction
