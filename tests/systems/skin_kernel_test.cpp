@@ -222,6 +222,73 @@ TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
   EXPECT_TRUE(result[0] == result[1]);
 }
 
+// Groups of every size, in every mode and on every compiled body the CPU runs: the layout's groups cut into runs
+// of 1, 2, 7, 15, 16, 17, 31, 32, 33 and 50 vertices (the same vertices, joints and weights) skin to the same
+// bytes as the uncut layout, the last run (at most 3 vertices) ending at the layout's end, where the kernel's one block
+// of 16 for a group under 16 vertices must start before the group. Then only every other run is kept: the
+// kernel writes exactly those runs' rows, and no row of a group it was not given nor of the padding.
+TEST(SkinKernel, GroupsOfEverySizeWriteTheSameBytesAndOnlyTheirOwnRows) {
+  Rig rig = to_rig(load_default_humanoid());
+  rig.body = default_bound_body();
+  rig.muscles = default_muscle_rig();
+  Crowd scene(rig);
+  CrowdConfig config;
+  config.walkers = 2;
+  config.motion = MotionSource::Walk;
+  spawn_crowd(scene, config);
+  set_detail_level(scene, DetailLevel::mesh(1));
+  Profiler profiler(8, false);
+  for (int f = 0; f < 4; ++f) step(scene, 0.1f, profiler);
+  for (const SkinningMode mode : kSkinningModes) {
+    set_skinning_mode(scene, mode);
+    const SkinLayout& whole = current_layout(scene);
+    SkinLayout cut = whole;
+    cut.groups.clear();
+    const std::uint32_t sizes[] = {1, 2, 7, 15, 16, 17, 31, 32, 33, 50};
+    std::size_t next_size = 0;
+    for (const SkinGroup& g : whole.groups)
+      for (std::uint32_t at = g.first, end = g.first + g.count; at < end;) {
+        SkinGroup run = g;
+        run.first = at;
+        const std::uint32_t left = end - at;
+        run.count = std::min(left, sizes[next_size++ % std::size(sizes)]);
+        if (end == whole.vertex_count && left - run.count < 3) run.count = left <= 3 ? left : left - 3;  // end on 3
+        cut.groups.push_back(run);
+        at += run.count;
+      }
+    const std::size_t padded = pad_to_lanes(whole.vertex_count);
+    ASSERT_LE(cut.groups.back().count, 3u);
+    ASSERT_EQ(cut.groups.back().first + cut.groups.back().count, whole.vertex_count);
+    ASSERT_GT(cut.groups.back().first + kSimdLaneFloats, padded) << "the last run's block must start before it";
+    SkinLayout alternate = cut;
+    alternate.groups.clear();
+    for (std::size_t i = 0; i < cut.groups.size(); i += 2) alternate.groups.push_back(cut.groups[i]);
+    for (const SkinKernelIsa isa : {SkinKernelIsa::Avx512, SkinKernelIsa::Avx2Fma, SkinKernelIsa::Portable}) {
+      if (!skin_kernel_isa_supported(isa)) continue;
+      force_skin_kernel_isa(isa);
+      const char* what = skin_kernel_isa_name(isa);
+      auto skin = [&](const SkinLayout& layout, std::size_t walker) {
+        std::vector<float> out(6 * padded, -7.0f);  // a value no skinned coordinate or normal component takes
+        EXPECT_TRUE(make_skin_walker_job(layout, scene.table(initial_slot(scene)), walker,
+                                         skin_output_in(out.data(), padded), mode).run());
+        return out;
+      };
+      for (std::size_t walker = 0; walker < 2; ++walker) {
+        const std::vector<float> expected = skin(whole, walker);
+        EXPECT_TRUE(skin(cut, walker) == expected) << skinning_mode_name(mode) << " " << what;
+        std::vector<char> kept(padded, 0);
+        for (const SkinGroup& g : alternate.groups) std::fill_n(kept.begin() + g.first, g.count, 1);
+        const std::vector<float> some = skin(alternate, walker);
+        for (std::size_t c = 0; c < 6; ++c)
+          for (std::size_t i = 0; i < padded; ++i)
+            ASSERT_EQ(some[c * padded + i], kept[i] ? expected[c * padded + i] : -7.0f)
+                << skinning_mode_name(mode) << " " << what << " column " << c << " row " << i;
+      }
+    }
+    force_skin_kernel_isa(SkinKernelIsa::Auto);
+  }
+}
+
 // validate() rejects each missing or mismatched input, and run() then writes nothing: the per-walker kernel job,
 // the crowd job and the cage's muscle displacement.
 TEST(SkinJobs, JobValidity) {
