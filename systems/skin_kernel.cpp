@@ -30,13 +30,14 @@ template <class Column>
   return column.data() == nullptr ? nullptr : column.data() + first;
 }
 
-// The vertex count a group loop runs: `count`, told to the compiler as a whole number of 16-vertex blocks (every
-// caller passes one; see skin_groups), so no vectorised loop has a scalar remainder.
+// The vertex count a group loop runs: `count` itself, or (Whole) the same count with the compiler told it is a
+// whole number of 16-vertex blocks, so no vectorised loop needs a scalar remainder (skin_groups' split below).
+template <bool Whole>
 [[gnu::always_inline]] inline std::size_t whole_vectors(std::uint32_t count) {
-  return std::size_t(count) & ~(kSimdLaneFloats - 1);
+  return Whole ? std::size_t(count) & ~(kSimdLaneFloats - 1) : std::size_t(count);
 }
 
-template <int K, bool Muscle, bool Rigid = false>
+template <int K, bool Muscle, bool Whole, bool Rigid = false>
 [[gnu::always_inline]] inline void skin_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count, const float (*m)[12],
                 const float* __restrict force, float* __restrict ox, float* __restrict oy, float* __restrict oz,
                 float* __restrict onx, float* __restrict ony, float* __restrict onz, float normal_scale = 1.0f) {
@@ -62,9 +63,10 @@ template <int K, bool Muscle, bool Rigid = false>
   float M[K][12];
   for (int k = 0; k < K; ++k)
     for (int c = 0; c < 12; ++c) M[k][c] = k == 0 ? m[0][c] : m[k][c] - m[0][c];
-  // The outputs arrive at row `first` (skin_groups offsets them, or passes a scratch block), and the index is
-  // 64-bit: with `first + i` in 32 bits the addresses may wrap, which GCC cannot vectorise.
-  const std::size_t n = whole_vectors(count);
+  // Outputs offset once and a 64-bit index: with `first + i` in 32 bits the addresses may wrap, which GCC
+  // cannot vectorise.
+  ox += first, oy += first, oz += first, onx += first, ony += first, onz += first;
+  const std::size_t n = whole_vectors<Whole>(count);
   for (std::size_t i = 0; i < n; ++i) {
     // Twelve named scalars rather than a float[12]: GCC keeps an array local in memory and then refuses to
     // vectorise the vertex loop ("no vectype"); scalars it vectorises.
@@ -118,13 +120,17 @@ template <int K, bool Muscle, bool Rigid = false>
 using JointDq = float[8];
 
 // A rotation matrix from a blended, not yet normalised quaternion: R(q) / |q|^2 written with 2 / |q|^2, so the
-// normalisation costs one division and no square root. The epsilon keeps a (never expected) zero blend finite:
-// the group's quaternions are sign-aligned with its first joint, so |blend| >= that joint's weight > 0.
+// normalisation costs one division and no square root. `half_norm2` is |q|^2 / 2 (half_norm2_of, or a cheaper
+// form the caller knows). The epsilon keeps a (never expected) zero blend finite: the group's quaternions are
+// sign-aligned with its first joint, so |blend| >= that joint's weight > 0.
 struct Rot {
   float r00, r01, r02, r10, r11, r12, r20, r21, r22, s2;
 };
-[[gnu::always_inline]] inline Rot rotation_of(float qx, float qy, float qz, float qw) {
-  const float s2 = 2.0f / (qx * qx + qy * qy + qz * qz + qw * qw + 1e-30f);
+[[gnu::always_inline]] inline float half_norm2_of(float qx, float qy, float qz, float qw) {
+  return 0.5f * (qx * qx + qy * qy + qz * qz + qw * qw);
+}
+[[gnu::always_inline]] inline Rot rotation_of(float qx, float qy, float qz, float qw, float half_norm2) {
+  const float s2 = 1.0f / (half_norm2 + 1e-30f);
   const float xs = qx * s2, ys = qy * s2, zs = qz * s2;
   const float xx = qx * xs, yy = qy * ys, zz = qz * zs, xy = qx * ys, xz = qx * zs, yz = qy * zs;
   const float wx = qw * xs, wy = qw * ys, wz = qw * zs;
@@ -132,10 +138,28 @@ struct Rot {
           s2};
 }
 
+// Half the squared length of a two-joint group's blend q0 + w (q1 - q0), per vertex: a quadratic in the one weight
+// with the group's coefficients, two multiply-adds where the sum of squares of the blended components takes four
+// and the 2 / |q|^2 another multiply. The loops are bound by their multiplies and FMAs (one 512-bit one a cycle on
+// Zen 4), so cor's two-influence loop loses 3 of its 69.
+struct HalfNorm2 {
+  float c0 = 0.0f, c1 = 0.0f, c2 = 0.0f;  // |q0|^2 / 2, q0 . dq, |dq|^2 / 2
+  static HalfNorm2 of(const float* q0, const float* dq) {
+    HalfNorm2 h;
+    for (int c = 0; c < 4; ++c) {
+      h.c0 += 0.5f * q0[c] * q0[c];
+      h.c1 += q0[c] * dq[c];
+      h.c2 += 0.5f * dq[c] * dq[c];
+    }
+    return h;
+  }
+  [[gnu::always_inline]] float at(float w) const { return c0 + w * (c1 + w * c2); }
+};
+
 // Dual quaternion skinning of one group (K >= 2): blend the K sign-aligned dual quaternions, normalise, and
 // apply the rigid transform to s * rest position; the normal turns by the rotation alone (already unit, no
 // renormalisation). Same loop shape as skin_group, for the same vectoriser reasons.
-template <int K, bool Muscle>
+template <int K, bool Muscle, bool Whole>
 [[gnu::always_inline]] inline void dqs_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count,
                                              const float (*d)[8], float scale, const float* __restrict force,
                                              float* __restrict ox, float* __restrict oy, float* __restrict oz,
@@ -158,7 +182,9 @@ template <int K, bool Muscle>
   float D[K][8];  // differences from the first, as in skin_group
   for (int k = 0; k < K; ++k)
     for (int c = 0; c < 8; ++c) D[k][c] = k == 0 ? d[0][c] : d[k][c] - d[0][c];
-  const std::size_t n = whole_vectors(count);
+  const HalfNorm2 half = K == 2 ? HalfNorm2::of(D[0], D[1]) : HalfNorm2{};
+  ox += first, oy += first, oz += first, onx += first, ony += first, onz += first;
+  const std::size_t n = whole_vectors<Whole>(count);
   for (std::size_t i = 0; i < n; ++i) {
     float v1 = 0.0f, v2 = 0.0f, v3 = 0.0f;
     if constexpr (K > 1) v1 = w1[i];
@@ -173,7 +199,7 @@ template <int K, bool Muscle>
     };
     const float qx = blend(0), qy = blend(1), qz = blend(2), qw = blend(3);
     const float ex = blend(4), ey = blend(5), ez = blend(6), ew = blend(7);
-    const Rot R = rotation_of(qx, qy, qz, qw);
+    const Rot R = rotation_of(qx, qy, qz, qw, K == 2 ? half.at(v1) : half_norm2_of(qx, qy, qz, qw));
     // Translation 2 (e q*)_xyz / |q|^2 of the normalised blend (Kavan et al.'s formula).
     const float tx = R.s2 * (qw * ex - ew * qx + qy * ez - qz * ey);
     const float ty = R.s2 * (qw * ey - ew * qy + qz * ex - qx * ez);
@@ -204,7 +230,7 @@ template <int K, bool Muscle>
 // Optimised centres of rotation (Le & Hodgins 2016) of one group (K >= 2): the blended matrices place the
 // vertex's centre c (linear blending is exact enough there: c sits where the weights say the joint is), the
 // blended quaternion R turns the rest offset about it: v' = R s (v - c) + LBS(c). The normal turns by R.
-template <int K, bool Muscle>
+template <int K, bool Muscle, bool Whole>
 [[gnu::always_inline]] inline void cor_group(const SkinLayout& L, std::uint32_t first, std::uint32_t count,
                                              const float (*m)[12], const float (*d)[8], float scale,
                                              const float* __restrict force, float* __restrict ox,
@@ -233,7 +259,9 @@ template <int K, bool Muscle>
     for (int c = 0; c < 12; ++c) M[k][c] = k == 0 ? m[0][c] : m[k][c] - m[0][c];
     for (int c = 0; c < 4; ++c) Q[k][c] = k == 0 ? d[0][c] : d[k][c] - d[0][c];
   }
-  const std::size_t n = whole_vectors(count);
+  const HalfNorm2 half = K == 2 ? HalfNorm2::of(Q[0], Q[1]) : HalfNorm2{};
+  ox += first, oy += first, oz += first, onx += first, ony += first, onz += first;
+  const std::size_t n = whole_vectors<Whole>(count);
   for (std::size_t i = 0; i < n; ++i) {
     float v1 = 0.0f, v2 = 0.0f, v3 = 0.0f;
     if constexpr (K > 1) v1 = w1[i];
@@ -259,7 +287,8 @@ template <int K, bool Muscle>
     const float lx = b0 * cx + b3 * cy + b6 * cz + b9;
     const float ly = b1 * cx + b4 * cy + b7 * cz + b10;
     const float lz = b2 * cx + b5 * cy + b8 * cz + b11;
-    const Rot R = rotation_of(qblend(0), qblend(1), qblend(2), qblend(3));
+    const float qx = qblend(0), qy = qblend(1), qz = qblend(2), qw = qblend(3);
+    const Rot R = rotation_of(qx, qy, qz, qw, K == 2 ? half.at(v1) : half_norm2_of(qx, qy, qz, qw));
     const float a = nx[i], c = ny[i], e = nz[i];
     const float ux = R.r00 * a + R.r01 * c + R.r02 * e;
     const float uy = R.r10 * a + R.r11 * c + R.r12 * e;
@@ -296,7 +325,7 @@ struct WalkerPose {
   const float* normal_scale = nullptr;
 };
 
-template <bool Muscle>
+template <bool Muscle, bool Whole>
 [[gnu::always_inline]] inline void dispatch(const SkinLayout& L, const SkinGroup& g, std::uint32_t first,
                                             std::uint32_t count, const WalkerPose& p,
                                             const float (*m)[12], const float (*d)[8], float* ox, float* oy,
@@ -308,37 +337,38 @@ template <bool Muscle>
     switch (g.influences) {
       case 1:
         if (ns > 0.0f)
-          skin_group<1, Muscle, true>(L, first, count, m, force, ox, oy, oz, onx, ony, onz, ns);
+          skin_group<1, Muscle, Whole, true>(L, first, count, m, force, ox, oy, oz, onx, ony, onz, ns);
         else
-          skin_group<1, Muscle>(L, first, count, m, force, ox, oy, oz, onx, ony, onz);
+          skin_group<1, Muscle, Whole>(L, first, count, m, force, ox, oy, oz, onx, ony, onz);
         break;
-      case 2: skin_group<2, Muscle>(L, first, count, m, force, ox, oy, oz, onx, ony, onz); break;
-      case 3: skin_group<3, Muscle>(L, first, count, m, force, ox, oy, oz, onx, ony, onz); break;
-      default: skin_group<4, Muscle>(L, first, count, m, force, ox, oy, oz, onx, ony, onz); break;
+      case 2: skin_group<2, Muscle, Whole>(L, first, count, m, force, ox, oy, oz, onx, ony, onz); break;
+      case 3: skin_group<3, Muscle, Whole>(L, first, count, m, force, ox, oy, oz, onx, ony, onz); break;
+      default: skin_group<4, Muscle, Whole>(L, first, count, m, force, ox, oy, oz, onx, ony, onz); break;
     }
   } else if (p.mode == SkinningMode::DualQuaternion) {
     switch (g.influences) {
-      case 2: dqs_group<2, Muscle>(L, first, count, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
-      case 3: dqs_group<3, Muscle>(L, first, count, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
-      default: dqs_group<4, Muscle>(L, first, count, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
+      case 2: dqs_group<2, Muscle, Whole>(L, first, count, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
+      case 3: dqs_group<3, Muscle, Whole>(L, first, count, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
+      default: dqs_group<4, Muscle, Whole>(L, first, count, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
     }
   } else {
     switch (g.influences) {
-      case 2: cor_group<2, Muscle>(L, first, count, m, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
-      case 3: cor_group<3, Muscle>(L, first, count, m, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
-      default: cor_group<4, Muscle>(L, first, count, m, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
+      case 2: cor_group<2, Muscle, Whole>(L, first, count, m, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
+      case 3: cor_group<3, Muscle, Whole>(L, first, count, m, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
+      default: cor_group<4, Muscle, Whole>(L, first, count, m, d, p.scale, force, ox, oy, oz, onx, ony, onz); break;
     }
   }
 }
 
+template <bool Whole>
 [[gnu::always_inline]] inline void run_group(bool muscle, const SkinLayout& L, const SkinGroup& g, std::uint32_t first,
                                              std::uint32_t count, const WalkerPose& p, const float (*m)[12],
                                              const float (*d)[8], float* ox, float* oy, float* oz, float* onx,
                                              float* ony, float* onz) {
   if (muscle)
-    dispatch<true>(L, g, first, count, p, m, d, ox, oy, oz, onx, ony, onz);
+    dispatch<true, Whole>(L, g, first, count, p, m, d, ox, oy, oz, onx, ony, onz);
   else
-    dispatch<false>(L, g, first, count, p, m, d, ox, oy, oz, onx, ony, onz);
+    dispatch<false, Whole>(L, g, first, count, p, m, d, ox, oy, oz, onx, ony, onz);
 }
 
 // The same body three times: for x86-64-v4 (AVX-512 F/BW/DQ/VL, 16 lanes), x86-64-v3 (AVX2 + FMA + F16C + BMI:
@@ -366,47 +396,27 @@ template <bool Muscle>
     }
     // A group's vertices start anywhere in the layout's arrays, and a 16-float vector that straddles two cache
     // lines costs a split load or store: level 0's groups as they lie ran 8-15 % slower than the same groups
-    // copied to 64-byte boundaries (every mode, AVX-512 and AVX2 bodies, AMD Zen 4). So a group of one vector
+    // copied to 64-byte boundaries (every mode, AVX-512 and AVX2 bodies, AMD Zen 4). So a group of two vectors
     // or more is run as one unaligned block of 16 at its start, then whole aligned blocks, then one block of 16
     // ending at its end: the edge blocks overlap the middle, recomputing a few vertices (the same instructions
     // on the same inputs, so the same values), and no loop has a scalar remainder. Rejected: padding each group
     // to a 16-vertex boundary in the layout, which puts unused vertices between groups in every consumer's
     // arrays (renderer, subdivision cage, tests against the twin).
-    // A group under 16 vertices (level 0 has 13, of 52 vertices, mostly three-joint seams) is one block of 16
-    // into a scratch, of which its own lanes are copied out: the block reads its neighbours' inputs (every
-    // column is padded to whole vectors and zero-filled, so they are finite) and writes nothing of theirs.
-    // Groups under 32 vertices used to run one vectorised pass and the rest one vertex at a time in the loops'
-    // scalar remainders (level 0: 17 groups, 126 vertices): 5 % of cor's time at level 0 (perf), 3 % of lbs's. Rejected: letting the block write on into the next group, which that group then
-    // overwrites; it saves the copy but makes the result depend on the groups' order and on padded outputs.
     const bool muscle = g.muscle && p.force;
     // (A function, not a lambda: a lambda's body is compiled for the baseline ISA, not the caller's target.)
     constexpr std::uint32_t lanes = kSimdLaneFloats;
-    const bool small = g.count < lanes;
-    alignas(64) float scratch[6][lanes];
+    if (g.count < 2 * lanes) {
+      run_group<false>(muscle, L, g, g.first, g.count, p, m, d, ox, oy, oz, onx, ony, onz);
+      continue;
+    }
     const std::uint32_t end = g.first + g.count;
     const std::uint32_t aligned = (g.first + lanes - 1) / lanes * lanes;
-    const std::uint32_t middle = small ? 0 : (end - aligned) / lanes * lanes;
-    // The small group's block: from its first vertex, or ending at the padded end when it lies that near it.
-    const std::uint32_t padded = static_cast<std::uint32_t>(pad_to_lanes(L.vertex_count));
-    const std::uint32_t starts[3] = {small ? std::min(g.first, padded - lanes) : g.first, aligned, end - lanes};
-    const std::uint32_t counts[3] = {small || aligned != g.first ? lanes : 0, middle,
-                                     !small && aligned + middle != end ? lanes : 0};
+    const std::uint32_t middle = (end - aligned) / lanes * lanes;  // >= 16: the group holds two vectors or more
     // One call site, so the kernel is inlined once more rather than three times (compile time, code size).
-    for (int s = 0; s < 3; ++s) {
-      if (counts[s] == 0) continue;
-      const std::uint32_t r = starts[s];
-      if (small)
-        run_group(muscle, L, g, r, counts[s], p, m, d, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
-                  scratch[5]);
-      else
-        run_group(muscle, L, g, r, counts[s], p, m, d, ox + r, oy + r, oz + r, onx + r, ony + r, onz + r);
-    }
-    if (small) {
-      const std::uint32_t lane = g.first - starts[0];
-      float* const outputs[6] = {ox, oy, oz, onx, ony, onz};
-      for (int c = 0; c < 6; ++c)
-        for (std::uint32_t i = 0; i < g.count; ++i) outputs[c][g.first + i] = scratch[c][lane + i];
-    }
+    const std::uint32_t starts[3] = {g.first, aligned, end - lanes};
+    const std::uint32_t counts[3] = {aligned != g.first ? lanes : 0, middle, aligned + middle != end ? lanes : 0};
+    for (int s = 0; s < 3; ++s)
+      if (counts[s] > 0) run_group<true>(muscle, L, g, starts[s], counts[s], p, m, d, ox, oy, oz, onx, ony, onz);
   }
 }
 

@@ -2,6 +2,7 @@
 // level of the shipped body and on random poses; the layout's bookkeeping; thread-count determinism.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <set>
 #include <tuple>
@@ -224,10 +225,11 @@ TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
 
 // Groups of every size, in every mode and on every compiled body the CPU runs: the layout's groups cut into runs
 // of 1, 2, 7, 15, 16, 17, 31, 32, 33 and 50 vertices (the same vertices, joints and weights) skin to the same
-// bytes as the uncut layout, the last run (at most 3 vertices) ending at the layout's end, where the kernel's one block
-// of 16 for a group under 16 vertices must start before the group. Then only every other run is kept: the
-// kernel writes exactly those runs' rows, and no row of a group it was not given nor of the padding.
-TEST(SkinKernel, GroupsOfEverySizeWriteTheSameBytesAndOnlyTheirOwnRows) {
+// results as the uncut layout (to float rounding: a vertex may fall in a loop's scalar remainder in one and in a
+// vector lane in the other), the last run (at most 3 vertices) ending at the layout's end. Then only every other
+// run is kept: the kernel writes exactly those runs' rows, and no row of a group it was not given nor of the
+// padding.
+TEST(SkinKernel, GroupsOfEverySizeGiveTheSameResultsAndWriteOnlyTheirOwnRows) {
   Rig rig = to_rig(load_default_humanoid());
   rig.body = default_bound_body();
   rig.muscles = default_muscle_rig();
@@ -275,14 +277,23 @@ TEST(SkinKernel, GroupsOfEverySizeWriteTheSameBytesAndOnlyTheirOwnRows) {
       };
       for (std::size_t walker = 0; walker < 2; ++walker) {
         const std::vector<float> expected = skin(whole, walker);
-        EXPECT_TRUE(skin(cut, walker) == expected) << skinning_mode_name(mode) << " " << what;
+        const std::vector<float> cut_out = skin(cut, walker);
+        float worst = 0.0f;
+        for (std::size_t c = 0; c < 6; ++c)
+          for (std::size_t i = 0; i < whole.vertex_count; ++i)
+            worst = std::max(worst, std::abs(cut_out[c * padded + i] - expected[c * padded + i]));
+        EXPECT_LT(worst, 2e-6f) << skinning_mode_name(mode) << " " << what;
         std::vector<char> kept(padded, 0);
         for (const SkinGroup& g : alternate.groups) std::fill_n(kept.begin() + g.first, g.count, 1);
         const std::vector<float> some = skin(alternate, walker);
         for (std::size_t c = 0; c < 6; ++c)
           for (std::size_t i = 0; i < padded; ++i)
-            ASSERT_EQ(some[c * padded + i], kept[i] ? expected[c * padded + i] : -7.0f)
-                << skinning_mode_name(mode) << " " << what << " column " << c << " row " << i;
+            if (kept[i])
+              ASSERT_NEAR(some[c * padded + i], expected[c * padded + i], 2e-6f)
+                  << skinning_mode_name(mode) << " " << what << " column " << c << " row " << i;
+            else
+              ASSERT_EQ(some[c * padded + i], -7.0f)
+                  << skinning_mode_name(mode) << " " << what << " column " << c << " row " << i << " written";
       }
     }
     force_skin_kernel_isa(SkinKernelIsa::Auto);
