@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <set>
 #include <tuple>
@@ -30,6 +31,27 @@
 
 namespace strata {
 namespace {
+
+// The shipped rig with its muscle layer.
+Rig muscled_rig() {
+  Rig rig = to_rig(load_default_humanoid());
+  rig.body = default_bound_body();
+  rig.muscles = default_muscle_rig();
+  return rig;
+}
+
+// `walkers` walkers of `rig` walking at mesh level `level`, stepped `frames` times by 0.1 s.
+std::unique_ptr<Crowd> walking_crowd(const Rig& rig, std::size_t walkers, int level, int frames) {
+  auto scene = std::make_unique<Crowd>(rig);
+  CrowdConfig config;
+  config.walkers = walkers;
+  config.motion = MotionSource::Walk;
+  spawn_crowd(*scene, config);
+  set_detail_level(*scene, DetailLevel::mesh(level));
+  Profiler profiler(8, false);
+  for (int f = 0; f < frames; ++f) step(*scene, 0.1f, profiler);
+  return scene;
+}
 
 TEST(SkinLayout, GroupsCoverEveryVertexOnceAndTrianglesFollowTheRenumbering) {
   const auto body = default_bound_body();
@@ -230,17 +252,9 @@ TEST(SkinKernel, SameBytesForOneAndTwoThreads) {
 // run is kept: the kernel writes exactly those runs' rows, and no row of a group it was not given nor of the
 // padding.
 TEST(SkinKernel, GroupsOfEverySizeGiveTheSameResultsAndWriteOnlyTheirOwnRows) {
-  Rig rig = to_rig(load_default_humanoid());
-  rig.body = default_bound_body();
-  rig.muscles = default_muscle_rig();
-  Crowd scene(rig);
-  CrowdConfig config;
-  config.walkers = 2;
-  config.motion = MotionSource::Walk;
-  spawn_crowd(scene, config);
-  set_detail_level(scene, DetailLevel::mesh(1));
-  Profiler profiler(8, false);
-  for (int f = 0; f < 4; ++f) step(scene, 0.1f, profiler);
+  const Rig rig = muscled_rig();
+  const std::unique_ptr<Crowd> walking = walking_crowd(rig, 2, 1, 4);
+  Crowd& scene = *walking;
   for (const SkinningMode mode : kSkinningModes) {
     set_skinning_mode(scene, mode);
     const SkinLayout& whole = current_layout(scene);
@@ -303,17 +317,9 @@ TEST(SkinKernel, GroupsOfEverySizeGiveTheSameResultsAndWriteOnlyTheirOwnRows) {
 // validate() rejects each missing or mismatched input, and run() then writes nothing: the per-walker kernel job,
 // the crowd job and the cage's muscle displacement.
 TEST(SkinJobs, JobValidity) {
-  Rig rig = to_rig(load_default_humanoid());
-  rig.body = default_bound_body();
-  rig.muscles = default_muscle_rig();
-  Crowd scene(rig);
-  CrowdConfig config;
-  config.walkers = 3;
-  config.motion = MotionSource::Walk;
-  spawn_crowd(scene, config);
-  set_detail_level(scene, DetailLevel::mesh(2));
-  Profiler profiler(8, false);
-  step(scene, 0.1f, profiler);
+  const Rig rig = muscled_rig();
+  const std::unique_ptr<Crowd> walking = walking_crowd(rig, 3, 2, 1);
+  Crowd& scene = *walking;
   const SkinLayout& layout = current_layout(scene);
   ASSERT_TRUE(layout.muscle_points > 0);
   const SoaTable& table = scene.table(initial_slot(scene));
