@@ -275,13 +275,16 @@ TEST(SkinKernel, GroupsOfEverySizeGiveTheSameResultsAndWriteOnlyTheirOwnRows) {
     const std::size_t padded = pad_to_lanes(whole.vertex_count);
     ASSERT_LE(cut.groups.back().count, 3u);
     ASSERT_EQ(cut.groups.back().first + cut.groups.back().count, whole.vertex_count);
-    ASSERT_GT(cut.groups.back().first + kSimdLaneFloats, padded) << "the last run's block must start before it";
+    ASSERT_GT(cut.groups.back().first + kSimdLaneFloats, padded) << "the last run should end inside the last block";
     SkinLayout alternate = cut;
     alternate.groups.clear();
     for (std::size_t i = 0; i < cut.groups.size(); i += 2) alternate.groups.push_back(cut.groups[i]);
     for (const SkinKernelIsa isa : {SkinKernelIsa::Avx512, SkinKernelIsa::Avx2Fma, SkinKernelIsa::Portable}) {
       if (!skin_kernel_isa_supported(isa)) continue;
       force_skin_kernel_isa(isa);
+      struct BackToAuto {  // also when an assertion below returns early
+        ~BackToAuto() { force_skin_kernel_isa(SkinKernelIsa::Auto); }
+      } back_to_auto;
       const char* what = skin_kernel_isa_name(isa);
       auto skin = [&](const SkinLayout& layout, std::size_t walker) {
         std::vector<float> out(6 * padded, -7.0f);  // a value no skinned coordinate or normal component takes
@@ -310,7 +313,6 @@ TEST(SkinKernel, GroupsOfEverySizeGiveTheSameResultsAndWriteOnlyTheirOwnRows) {
                   << skinning_mode_name(mode) << " " << what << " column " << c << " row " << i << " written";
       }
     }
-    force_skin_kernel_isa(SkinKernelIsa::Auto);
   }
 }
 
