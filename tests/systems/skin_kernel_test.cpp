@@ -287,7 +287,7 @@ TEST(SkinKernel, GroupsOfEverySizeGiveTheSameResultsAndWriteOnlyTheirOwnRows) {
       } back_to_auto;
       const char* what = skin_kernel_isa_name(isa);
       auto skin = [&](const SkinLayout& layout, std::size_t walker) {
-        std::vector<float> out(6 * padded, -7.0f);  // a value no skinned coordinate or normal component takes
+        std::vector<float> out(6 * padded, test::kSentinel);  // no skinned coordinate or normal takes it
         EXPECT_TRUE(make_skin_walker_job(layout, scene.table(initial_slot(scene)), walker,
                                          skin_output_in(out.data(), padded), mode).run());
         return out;
@@ -309,7 +309,7 @@ TEST(SkinKernel, GroupsOfEverySizeGiveTheSameResultsAndWriteOnlyTheirOwnRows) {
               ASSERT_NEAR(some[c * padded + i], expected[c * padded + i], 2e-6f)
                   << skinning_mode_name(mode) << " " << what << " column " << c << " row " << i;
             else
-              ASSERT_EQ(some[c * padded + i], -7.0f)
+              ASSERT_EQ(some[c * padded + i], test::kSentinel)
                   << skinning_mode_name(mode) << " " << what << " column " << c << " row " << i << " written";
       }
     }
