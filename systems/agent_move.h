@@ -54,10 +54,19 @@ inline bool agent_held_still(float gait_idle) { return gait_idle > 0.0f; }
 // walked sideways on a forward gait, its feet planted 0.6 m off the line it went along, and dragged. Measured
 // against the target, not the preferred velocity: navigation turns the wish from the body's heading at the turn
 // rate (followable_velocity), so a body facing a crowd's flow wished along it, faced it, and was carried into the
-// other group's goal region (3 of the crossing's 200 never arrived). Wanting nothing, it faces where it goes. Zero
-// when neither has a direction.
+// other group's goal region (3 of the crossing's 200 never arrived). Carried further off than side_angle, it faces
+// its wish turned towards the line it goes along just far enough that it is carried across itself at no more than
+// `side_speed` (side_step_turn; 0 turns that off): no forward gait steps sideways at 1.2 m/s, the crossing's other
+// stream. Wanting nothing, it faces where it goes. Zero when neither has a direction.
 glm::vec2 facing_direction(glm::vec2 velocity, glm::vec2 preferred, glm::vec2 to_target, float walking_speed,
-                           float side_angle);
+                           float side_angle, float side_speed = 0.0f);
+// facing_direction's first rule: whether the body faces its velocity (carried at walking_speed or faster within
+// side_angle of the way to its target, or moving without a wish).
+bool faces_velocity(glm::vec2 velocity, glm::vec2 preferred, glm::vec2 to_target, float walking_speed,
+                    float side_angle);
+// facing_direction's second rule: how far (rad, signed as headings) the body turns from its wish towards the line
+// of its velocity so that it is carried across itself at no more than side_speed; 0 when it already is.
+float side_step_turn(glm::vec2 velocity, glm::vec2 preferred, float side_speed);
 
 struct AgentMoveParameters {
   // The walk's own values (GaitStyle), which the walk predicts footprints and turns the body with: a crowd takes
@@ -70,6 +79,7 @@ struct AgentMoveParameters {
   // faces its velocity.
   float face_velocity_speed = GaitStyle{}.face_velocity_speed;
   float face_side_angle = GaitStyle{}.face_side_angle;
+  float face_side_speed = GaitStyle{}.face_side_speed;
   float start_speed = 0.15f;   // m/s a standing body may start at (above GaitStyle::stand_speed)
   float progress_step = 0.25f; // m: coming this much nearer the goal counts as progress
 
@@ -82,6 +92,7 @@ struct AgentMoveParameters {
     p.braking = style.agent_braking;
     p.face_velocity_speed = style.face_velocity_speed;
     p.face_side_angle = style.face_side_angle;
+    p.face_side_speed = style.face_side_speed;
     return p;
   }
 };
@@ -91,6 +102,13 @@ struct AgentMoveParameters {
 // braking limits of its current `speed`, never faster than the wish. Navigation passes its preferred velocity
 // through this (systems/navigation.h), so avoidance starts from a velocity the body can follow.
 glm::vec2 followable_velocity(glm::vec2 wish, float heading, float speed, const AgentMoveParameters& params, float dt);
+
+// The heading navigation turns the wish from (followable_velocity): the body's, less the turn it made only to keep
+// its feet under a sideways carry (side_step_turn, from the last step's velocity and preferred velocity). That turn
+// is the feet's, not a change of mind: counted, it dragged the wish along the carry (the wish turns from the heading
+// at the turn rate and slows while it faces away), and a walker swept by a crowd's flow drifted on with it.
+float wish_heading(float heading, glm::vec2 velocity, glm::vec2 last_preferred, glm::vec2 to_target,
+                   const AgentMoveParameters& params);
 
 struct AgentMoveJob {
   ColumnView<float> agent;                   // kAgentFloats, read and written

@@ -531,7 +531,7 @@ GaitClock advance_gait_clock(const LocomotionRig& rig, const TrackSource& source
     track.speed = glm::length(track.velocity);
     track.turn_rate = turn_rate_at(track.speed, style.turn_rate, style.turn_in_place_rate);
     const glm::vec2 face = facing_direction(agent_v, wish, target - glm::vec2(a.at(kAgentPx, i), a.at(kAgentPz, i)),
-                                            style.face_velocity_speed, style.face_side_angle);
+                                            style.face_velocity_speed, style.face_side_angle, style.face_side_speed);
     if (face.x != 0.0f || face.y != 0.0f) track.turn = wrap_angle(std::atan2(face.x, face.y) - track.heading);
     const glm::vec2 to_target = target - track.position;
     // The course turns towards the steering target only while the agent goes where it wishes (navigation turns

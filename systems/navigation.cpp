@@ -192,7 +192,9 @@ void steer_one(const SteerJob& job, std::size_t i) {
   // slows everyone for a moment, and wishes limited to that slower speed kept the whole crowd crawling (the
   // bottleneck emptied at 0.13 agents a second).
   const float last_pref = std::hypot(a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i));
-  const glm::vec2 pref = followable_velocity(wish, a.at(kAgentHeading, i), last_pref, job.body, job.dt);
+  const float heading = wish_heading(a.at(kAgentHeading, i), {a.at(kAgentVx, i), a.at(kAgentVz, i)},
+                                     {a.at(kAgentPrefVx, i), a.at(kAgentPrefVz, i)}, to, job.body);
+  const glm::vec2 pref = followable_velocity(wish, heading, last_pref, job.body, job.dt);
   a.at(kAgentPrefVx, i) = pref.x;
   a.at(kAgentPrefVz, i) = pref.y;
 }

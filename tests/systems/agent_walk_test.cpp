@@ -68,7 +68,11 @@ struct AgentWalker {
     SoaTable& t = table();
     // As navigation does: the wish goes through what the body can follow; no one to avoid, so avoidance would
     // return it unchanged.
-    const glm::vec2 pref = followable_velocity(wish, t.f32(kWalkerAgent, kAgentHeading)[0],
+    const float heading = wish_heading(t.f32(kWalkerAgent, kAgentHeading)[0],
+                                       {t.f32(kWalkerAgent, kAgentVx)[0], t.f32(kWalkerAgent, kAgentVz)[0]},
+                                       {t.f32(kWalkerAgent, kAgentPrefVx)[0], t.f32(kWalkerAgent, kAgentPrefVz)[0]},
+                                       10.0f * wish, move);
+    const glm::vec2 pref = followable_velocity(wish, heading,
                                                std::hypot(t.f32(kWalkerAgent, kAgentVx)[0], t.f32(kWalkerAgent, kAgentVz)[0]),
                                                move, dt);
     t.f32(kWalkerAgent, kAgentTargetX)[0] = t.f32(kWalkerAgent, kAgentPx)[0] + 10.0f * wish.x;
@@ -299,6 +303,101 @@ TEST(AgentWalk, FacingDirectionIsTheWishUnlessCarriedAcrossAtWalkingPace) {
       << "60 deg off";
 }
 
+// A walker settling into (or leaving) its idle stance stands with its feet side by side and flat: its body does not
+// turn towards a wish too slow to walk, which twisted the legs over the planted feet (past max_foot_twist a flat
+// foot cannot pivot) and slid the toes by up to 3 cm in the crossing.
+TEST(AgentWalk, ABodySettlingIntoItsStanceDoesNotTurnOverItsFeet) {
+  AgentWalker w;
+  GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
+  const float dt = 1.0f / 60.0f;
+  std::optional<float> settling_heading;
+  for (int f = 0; f < 420; ++f) {
+    // Walking +Z, then wishing for 6 cm/s towards +X: slower than stand_speed, so it brakes (turning a little on
+    // the way) and stands.
+    w.frame(f < 120 ? glm::vec2(0.0f, 1.2f) : glm::vec2(0.06f, 0.0f), dt);
+    metrics.observe(walker_lanes(w.table(), w.crowd->joint_count()), w.crowd->motion.paths, dt);
+    if (f >= 120 && w.gait(kGaitIdle) > 0.0f && !settling_heading) settling_heading = w.agent(kAgentHeading);
+  }
+  ASSERT_TRUE(settling_heading.has_value());
+  EXPECT_LT(std::abs(*settling_heading), 1.0f) << "it began to settle before turning to +X";
+  EXPECT_EQ(w.agent(kAgentHeading), *settling_heading) << "standing, it did not turn";
+  EXPECT_FLOAT_EQ(w.gait(kGaitIdle), 1.0f) << "standing";
+  EXPECT_LT(metrics.report().foot_slide_mm_max, 1.0);
+}
+
+// Swept further off its way than face_side_angle, a body keeps facing nearly its wish but turns towards the line
+// it is carried along until it goes across itself at no more than face_side_speed: a forward gait steps sideways
+// that fast and no faster. Carried backwards at a slant it turns towards straight back.
+TEST(AgentWalk, FacingTurnsOffTheWishOnlyAsFarAsASideStepNeeds) {
+  const float speed = 0.6f, side = 1.2f, side_speed = 0.4f;
+  const glm::vec2 wish(0.0f, 1.2f), ahead(0.0f, 10.0f);
+  const auto across = [](glm::vec2 facing, glm::vec2 v) {
+    const glm::vec2 f = glm::normalize(facing);
+    return f.y * v.x - f.x * v.y;
+  };
+  const auto along = [](glm::vec2 facing, glm::vec2 v) { return glm::dot(glm::normalize(facing), v); };
+  const glm::vec2 swept(1.2f, 0.1f);  // 85 degrees off at 1.2 m/s: beyond `side`, so not faced
+  const glm::vec2 f = facing_direction(swept, wish, ahead, speed, side, side_speed);
+  EXPECT_NEAR(across(f, swept), side_speed, 1e-4f);
+  EXPECT_GT(along(f, swept), 0.0f) << "the carry stays ahead of the body";
+  EXPECT_GT(f.x, 0.0f) << "turned towards the carry";
+  EXPECT_NEAR(glm::length(f), glm::length(wish), 1e-4f);
+  const glm::vec2 mirrored = facing_direction({-1.2f, 0.1f}, wish, ahead, speed, side, side_speed);
+  EXPECT_NEAR(mirrored.x, -f.x, 1e-4f);
+  EXPECT_NEAR(mirrored.y, f.y, 1e-4f);
+  const glm::vec2 back_slant(0.8f, -0.9f);  // backwards and 0.8 m/s across
+  const glm::vec2 b = facing_direction(back_slant, wish, ahead, speed, side, side_speed);
+  EXPECT_NEAR(std::abs(across(b, back_slant)), side_speed, 1e-4f);
+  EXPECT_LT(along(b, back_slant), 0.0f) << "still stepping back, not turned round";
+  EXPECT_LT(b.x, 0.0f) << "turned so the carry comes nearer straight behind";
+  EXPECT_EQ(facing_direction({0.35f, 0.2f}, wish, ahead, speed, side, side_speed), wish) << "0.35 m/s across, slow";
+  EXPECT_EQ(facing_direction(swept, wish, ahead, speed, side, 0.0f), wish) << "the rule off";
+  // Navigation turns the wish from the heading less this turn: a body turned for its feet still wishes for its way.
+  AgentMoveParameters p;
+  p.face_velocity_speed = speed, p.face_side_angle = side, p.face_side_speed = side_speed;
+  const float turned = std::atan2(f.x, f.y);
+  EXPECT_NEAR(wish_heading(turned, swept, wish, ahead, p), 0.0f, 1e-4f);
+  EXPECT_EQ(wish_heading(0.3f, {1.0f, 0.58f}, wish, ahead, p), 0.3f) << "facing its velocity, as chosen";
+}
+
+// Swept nearly across its way at 1.2 m/s (another stream of a crossing), beyond face_side_angle: the walker turns only
+// as far as its feet need, and once turned keeps them planted and goes on wishing for its way; kept facing its wish
+// it walks sideways at 1.2 m/s on a forward gait and a foot drags every stance.
+TEST(AgentWalk, ABodySweptAcrossItsWayTurnsAsFarAsItsFeetNeedAndKeepsItsWish) {
+  const glm::vec2 wish(0.0f, 1.2f), swept(1.19f, 0.1f);
+  double slide[2] = {0.0, 0.0};
+  float heading_after[2] = {0.0f, 0.0f}, wish_after[2] = {0.0f, 0.0f};
+  for (int rule = 0; rule < 2; ++rule) {
+    AgentWalker w;
+    if (rule == 0) {
+      w.crowd->motion.style.face_side_speed = 0.0f;
+      w.move = AgentMoveParameters::of(w.crowd->motion.style);
+    }
+    GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
+    const float dt = 1.0f / 60.0f;
+    for (int f = 0; f < 420; ++f) {
+      w.frame(wish, dt, {}, f < 90 ? std::nullopt : std::optional<glm::vec2>(swept));
+      // From 2.5 s into the sweep: the turn itself (about a second at the turn rate while carried at 1.2 m/s) still
+      // strains the feet for a few stances (up to 12 mm here).
+      if (f >= 240) metrics.observe(walker_lanes(w.table(), w.crowd->joint_count()), w.crowd->motion.paths, dt);
+      for (std::uint32_t c = 0; c < kAgentFloats; ++c) ASSERT_TRUE(std::isfinite(w.agent(c)));
+    }
+    slide[rule] = metrics.report().foot_slide_mm_max;
+    heading_after[rule] = w.agent(kAgentHeading);
+    wish_after[rule] = std::atan2(w.agent(kAgentPrefVx), w.agent(kAgentPrefVz));
+  }
+  std::printf("swept across: foot slide %.2f mm facing its wish, %.2f mm turned for its feet; heading %.2f / %.2f rad, "
+              "wish %.2f / %.2f rad\n",
+              slide[0], slide[1], heading_after[0], heading_after[1], wish_after[0], wish_after[1]);
+  const GaitStyle style;
+  const float side_speed = std::sin(std::atan2(swept.x, swept.y) - heading_after[1]) * glm::length(swept);
+  EXPECT_NEAR(side_speed, style.face_side_speed, 0.02f) << "turned as far as its feet need";
+  EXPECT_NEAR(heading_after[0], 0.0f, 0.05f) << "without the rule it keeps facing its wish";
+  EXPECT_NEAR(wish_after[1], 0.0f, 0.05f) << "still wishing for its way";
+  EXPECT_LT(slide[1], 1.0);
+  EXPECT_GT(slide[0], 3.0 * slide[1] + 1.0) << "the rule is what keeps the feet";
+}
+
 // Carried across its wish at a walking pace for a few seconds (avoidance sending it round someone), a walker turns
 // to face where it goes and keeps its feet planted; told to keep facing its wish, the same walker walks sideways on a
 // forward gait.
@@ -310,6 +409,7 @@ TEST(AgentWalk, ACarriedBodyTurnsToWhereItGoesAndKeepsItsFeet) {
     AgentWalker w;
     if (facing == 0) {
       w.crowd->motion.style.face_velocity_speed = 1e6f;
+      w.crowd->motion.style.face_side_speed = 0.0f;
       w.move = AgentMoveParameters::of(w.crowd->motion.style);
     }
     GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
