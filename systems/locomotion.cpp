@@ -817,10 +817,12 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       plant_foot(g, leg, {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)}, g.leg(leg, kLegToHeading),
                  g.leg(leg, kLegToDistance));
     } else if (!swinging && source.agents() && lanes.ik_flags.components != 0 &&
-               (unreachable(lanes, leg, i) || (g.leg(1 - leg, kLegSwinging) < 0.5f && unreachable(lanes, 1 - leg, i))) &&
+               (unreachable(lanes, leg, i) || (g.leg(1 - leg, kLegSwinging) < 0.5f && unreachable(lanes, 1 - leg, i)) ||
+                std::abs(wrap_angle(g.leg(leg, kLegPlantHeading) - pelvis.heading)) > style.lift_twist) &&
                lifts_early(psi, sf, style)) {
-      // Agents: a rolling stance foot the leg could not reach last frame lifts now (GaitStyle::early_lift), from
-      // the pose it has, and lands at the usual heel strike.
+      // Agents: a rolling stance foot the leg could not reach last frame, or twisted past lift_twist under a turning
+      // body, lifts now (GaitStyle::early_lift), from the pose it has, and lands at the usual heel strike. The twist
+      // is read now, not off IK's flags: its clamp yaws the foot in the very frame it binds.
       lift_off(leg, psi, psi / sf, strike_pitch, psi);
     } else if (!swinging && psi >= sf) {
       // Toe-off: leave from the rolled stance pose; aim where the pelvis will be at heel strike plus the lead.

@@ -234,6 +234,11 @@ struct GaitStyle {
   // its swing now rather than at toe-off: its toe tip was what dragged (0.3 m at worst in the crossing). The swing
   // leaves from the pose the foot has and lands on time; 0 or above 1 turns it off.
   float early_lift = 0.8f;
+  // Agents: a stance leg twisted further than this (rad) under a turning body, the foot on its ball where it cannot
+  // pivot, lifts early too (same fraction, the other foot down): the legs' twist runs out near 0.9 rad, and IK's
+  // orientation clamp then yawed the foot about its ball, the tip sliding 4-16 mm (arrivals turning into their
+  // regions, making way). 10 turns it off.
+  float lift_twist = 0.8f;
   // Agents: a swinging foot re-aims at the newest footprint prediction until this fraction of its swing.
   float retarget_until = 0.8f;
   // Lowest cadence of a walking agent (steps/min): at a crawl the gait formula's cadence falls to 40, slow motion;

@@ -303,6 +303,35 @@ TEST(AgentWalk, FacingDirectionIsTheWishUnlessCarriedAcrossAtWalkingPace) {
       << "60 deg off";
 }
 
+// Edging round a tight circle, a stance foot under a body that has turned past what the legs twist lifts early (once
+// the other foot is down) rather than being yawed on its ball by IK's orientation clamp.
+TEST(AgentWalk, AStanceFootTwistedPastTheLegsLiftsEarly) {
+  double slide[2] = {0.0, 0.0};
+  std::size_t clamped[2] = {0, 0};
+  for (int rule = 0; rule < 2; ++rule) {
+    AgentWalker w;
+    if (rule == 0) w.crowd->motion.style.lift_twist = 10.0f;  // off
+    GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
+    const float dt = 1.0f / 60.0f;
+    for (int f = 0; f < 900; ++f) {
+      // Edging along at 0.3 m/s (its cadence at the agents' floor, 80 steps a minute: long stances) on a tight
+      // circle, its wish turning at 1.2 rad/s.
+      const float angle = f < 60 ? 0.0f : 1.2f * static_cast<float>(f - 60) * dt;
+      const glm::vec2 wish = 0.3f * glm::vec2(std::sin(angle), std::cos(angle));
+      w.frame(wish, dt);
+      metrics.observe(walker_lanes(w.table(), w.crowd->joint_count()), w.crowd->motion.paths, dt);
+      for (std::uint32_t c = 0; c < kAgentFloats; ++c) ASSERT_TRUE(std::isfinite(w.agent(c)));
+    }
+    slide[rule] = metrics.report().foot_slide_mm_max;
+    clamped[rule] = static_cast<std::size_t>(metrics.report().ik_orientation_clamped);
+  }
+  std::printf("tight circle: foot slide %.2f mm without the twist lift, %.2f mm with; orientation clamps %zu / %zu\n",
+              slide[0], slide[1], clamped[0], clamped[1]);
+  EXPECT_LT(slide[1], 1.0);
+  EXPECT_LT(clamped[1], clamped[0]);
+  EXPECT_GT(slide[0], 1.0) << "without the lift the twisted foot is yawed on its ball";
+}
+
 // A walker settling into (or leaving) its idle stance stands with its feet side by side and flat: its body does not
 // turn towards a wish too slow to walk, which twisted the legs over the planted feet (past max_foot_twist a flat
 // foot cannot pivot) and slid the toes by up to 3 cm in the crossing.
