@@ -84,7 +84,8 @@ enum AgentComponent : std::uint32_t {
   kAgentGoalX, kAgentGoalZ,      // the goal it walks to now
   kAgentGoalRadius,              // arrived within this distance (m)
   kAgentTargetX, kAgentTargetZ,  // the corner of its navigation path it steers at
-  kAgentBestDistance,            // nearest it has been to its goal since the goal was set (m, path length)
+  kAgentBestDistance,            // nearest it has been to its goal since the goal was set (m, along the way it knows;
+                                 //   raised by as much when a path shows the way longer: systems/navigation.cpp)
   kAgentSinceProgress,           // seconds since it last came 0.25 m nearer (stuck detection)
   kAgentTravelTime,              // seconds since the goal was set
   kAgentReplanIn,                // seconds until its path is planned again (staggered over agents)

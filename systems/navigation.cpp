@@ -275,6 +275,13 @@ bool PlanJob::run() const {
   for (const std::uint32_t i : rows) {
     const glm::vec2 pos(agent.at(kAgentPx, i), agent.at(kAgentPz, i));
     glm::vec2 goal(agent.at(kAgentGoalX, i), agent.at(kAgentGoalZ, i));
+    // What is left of the way as the agent knew it (straight on past the corners it kept, or straight to the goal
+    // before its first path): progress is counted along the way it knows (agent_move), so a longer way learnt now
+    // (a detour round an obstacle, corners beyond those kept, a goal moved) raises the nearest-so-far by as much.
+    // Without this a walker going round the plaza's fountain at full speed made no "progress" until it had walked
+    // off the detour, was counted stuck after 5 s, and its wish wobbled four times as hard (SteeringParameters::wobble).
+    // Only the path's own increase is added: a body pushed back meanwhile has not come nearer.
+    const float known_before = agent_path_distance(ColumnView<const float>(agent), ColumnView<const float>(corners), i);
     // A random goal drawn on an obstacle (or in its margin) is drawn again, a few times: snapped to the obstacle's
     // edge instead, every agent whose point fell on the plaza's fountain queued round its rim.
     const std::uint32_t group = std::min<std::uint32_t>(state.at(kAgentGroup, i), static_cast<std::uint32_t>(goals.size() - 1));
@@ -309,6 +316,8 @@ bool PlanJob::run() const {
     }
     corners.at(kAgentCorners * 2, i) = static_cast<float>(n);
     agent.at(kAgentReplanIn, i) = replan_period;
+    const float known_now = agent_path_distance(ColumnView<const float>(agent), ColumnView<const float>(corners), i);
+    if (known_now > known_before) agent.at(kAgentBestDistance, i) += known_now - known_before;
   }
   return true;
 }
