@@ -203,7 +203,7 @@ struct GaitStyle {
   // stream at 1.1-1.2 m/s, 70-80 degrees off its way, a walker facing its way walked sideways on a forward gait for
   // seconds, each stance leg out of reach in single support and the foot dragged (most of that run's slides over
   // 1 mm). Over five seeds each of crossing / bottleneck / plaza, stance frames sliding more than 1 mm 514 / 519 / 535
-  // -> 144 / 471 / 272 on average, more than 1 cm 68 / 28 / 73 -> 3.8 / 10.4 / 9.4, stuck alike (docs/crowds.md).
+  // -> 143 / 403 / 297 on average, more than 1 cm 68 / 28 / 73 -> 3.8 / 15 / 13, stuck alike (docs/crowds.md).
   // 0.3-0.7 measured too; without wish_heading the wish followed the turned body and the plaza's stuck rose 28 -> 33.
   float face_side_speed = 0.4f;
   // Agents: the walk predicts the course turning towards the steering target while the velocity is within this
