@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <map>
 #include <memory>
-#include <stdexcept>
 
 #include <tbb/global_control.h>
 
@@ -128,22 +127,19 @@ TEST(ScenarioCrowd, AWalkerGoingRoundAWallIsNeverCountedStuck) {
   CrowdMetrics metrics;
   const float dt = 1.0f / 30.0f;
   float longest_without_progress = 0.0f, walked = 0.0f;
-  // The one walker's table (no camera: every walker sits in one detail slot).
-  const auto walker_table = [&]() -> const SoaTable& {
-    for (std::size_t slot = 0; slot < kDetailSlots; ++slot)
-      if (crowd->world.table(crowd->tables[slot]).size() == 1) return crowd->world.table(crowd->tables[slot]);
-    throw std::logic_error("no table holds the walker");
-  };
-  glm::vec2 last(walker_table().f32(kWalkerAgent, kAgentPx)[0], walker_table().f32(kWalkerAgent, kAgentPz)[0]);
+  // No camera: the walker stays in the table it was put in.
+  const SoaTable& table = crowd->table(initial_slot(*crowd));
+  ASSERT_EQ(table.size(), 1u);
+  glm::vec2 last(table.f32(kWalkerAgent, kAgentPx)[0], table.f32(kWalkerAgent, kAgentPz)[0]);
   for (int f = 0; f < 30 * 30; ++f) {
     step(*crowd, dt, profiler);
     metrics.observe(*crowd, dt);
-    const SoaTable& now = walker_table();
-    const glm::vec2 p(now.f32(kWalkerAgent, kAgentPx)[0], now.f32(kWalkerAgent, kAgentPz)[0]);
+    ASSERT_EQ(table.size(), 1u);
+    const glm::vec2 p(table.f32(kWalkerAgent, kAgentPx)[0], table.f32(kWalkerAgent, kAgentPz)[0]);
     walked += glm::length(p - last);
     last = p;
-    if ((now.u32(kWalkerAgentState, kAgentFlags)[0] & kAgentArrived) == 0u)
-      longest_without_progress = std::max(longest_without_progress, now.f32(kWalkerAgent, kAgentSinceProgress)[0]);
+    if ((table.u32(kWalkerAgentState, kAgentFlags)[0] & kAgentArrived) == 0u)
+      longest_without_progress = std::max(longest_without_progress, table.f32(kWalkerAgent, kAgentSinceProgress)[0]);
   }
   const CrowdMetricsReport r = metrics.report();
   std::printf("round the wall: walked %.1f m, longest without progress %.2f s, %.1f s to the goal\n", walked,
