@@ -30,7 +30,18 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
   float heading = a.at(kAgentHeading, i);
   if (!held && (face.x != 0.0f || face.y != 0.0f)) {
     const float most = turn_rate_at(speed, p.turn_rate, p.turn_in_place_rate) * dt;
-    heading = wrap_angle(heading + std::clamp(wrap_angle(std::atan2(face.x, face.y) - heading), -most, most));
+    float turn = std::clamp(wrap_angle(std::atan2(face.x, face.y) - heading), -most, most);
+    // On one foot the body turns only as far as that foot's twist allows (stance_limited_turn). Predicting the
+    // turn into each footprint's heading was not enough: a slow walker's stance lasts 0.9 s, and a wish that keeps
+    // turning (a walker stepping round another) turned the body up to 1.0 rad over a foot planted for less.
+    for (int leg = 0; leg < 2; ++leg) {
+      const auto c = [&](int l, std::uint32_t k) {
+        return job.gait.at(kGaitLegs + static_cast<std::uint32_t>(l) * kLegFloats + k, i);
+      };
+      if (c(leg, kLegSwinging) < 0.5f && c(1 - leg, kLegSwinging) > 0.5f)
+        turn = stance_limited_turn(heading, turn, c(leg, kLegPlantHeading), p.stance_twist);
+    }
+    heading = wrap_angle(heading + turn);
   }
   a.at(kAgentVx, i) = vx;
   a.at(kAgentVz, i) = vz;
@@ -57,6 +68,12 @@ void move_one(const AgentMoveJob& job, std::size_t i) {
 namespace {
 constexpr float kDirectionless = 0.05f;  // m/s: slower than this, a velocity or wish has no direction
 }  // namespace
+
+float stance_limited_turn(float heading, float turn, float plant_heading, float limit) {
+  const float before = wrap_angle(heading - plant_heading), after = before + turn;
+  if (std::abs(after) <= limit || std::abs(after) <= std::abs(before)) return turn;
+  return std::copysign(std::max(limit, std::abs(before)), after) - before;
+}
 
 bool faces_velocity(glm::vec2 velocity, glm::vec2 preferred, glm::vec2 to_target, float walking_speed,
                     float side_angle) {

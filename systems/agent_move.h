@@ -14,7 +14,7 @@
 // left the set avoidance had proved collision-free, and a 24-agent circle overlapped by 10 cm.
 //
 //   reads:  agent (avoidance velocity, preferred velocity, position, heading, steering target, goal, corners),
-//           gait (idle), dt
+//           gait (idle; each leg's swinging flag and planted heading), dt
 //   writes: agent (position, velocity, heading, best distance, time since progress, travel time)
 #include <cmath>
 #include <cstddef>
@@ -80,6 +80,7 @@ struct AgentMoveParameters {
   float face_velocity_speed = GaitStyle{}.face_velocity_speed;
   float face_side_angle = GaitStyle{}.face_side_angle;
   float face_side_speed = GaitStyle{}.face_side_speed;
+  float stance_twist = GaitStyle{}.stance_twist;
   float start_speed = 0.15f;   // m/s a standing body may start at (above GaitStyle::stand_speed)
   float progress_step = 0.25f; // m: coming this much nearer the goal counts as progress
 
@@ -93,9 +94,16 @@ struct AgentMoveParameters {
     p.face_velocity_speed = style.face_velocity_speed;
     p.face_side_angle = style.face_side_angle;
     p.face_side_speed = style.face_side_speed;
+    p.stance_twist = style.stance_twist;
     return p;
   }
 };
+
+// The part of a body's `turn` (rad, signed as headings) it can make over a foot planted at `plant_heading` while
+// the other foot swings: the foot's twist under the body (heading less plant heading) grows no further than
+// `limit`, nor than it already is. Turns that untwist it are whole. People turn by stepping; on one foot the hip,
+// knee and ankle twist at most ~0.9 rad between them, and the foot cannot lift until the other is down.
+float stance_limited_turn(float heading, float turn, float plant_heading, float limit);
 
 // The velocity a walking body can take up this step on its way to `wish`: turned from its heading by at most its
 // turn rate, slowed while it faces away (to a stop past 90 degrees: it turns on the spot), within acceleration and
@@ -113,7 +121,7 @@ float wish_heading(float heading, glm::vec2 velocity, glm::vec2 last_preferred, 
 struct AgentMoveJob {
   ColumnView<float> agent;                   // kAgentFloats, read and written
   ColumnView<const float> corners;           // kAgentCorners * 2 + 1
-  ColumnView<const float> gait;              // kGaitFloats (kGaitIdle read)
+  ColumnView<const float> gait;              // kGaitFloats (kGaitIdle, kLegSwinging, kLegPlantHeading read)
   ColumnView<const std::uint32_t> state;     // kAgentInts (flags read)
   AgentMoveParameters params;
   float dt = 0.0f;

@@ -239,6 +239,12 @@ struct GaitStyle {
   // orientation clamp then yawed the foot about its ball, the tip sliding 4-16 mm (arrivals turning into their
   // regions, making way). 10 turns it off.
   float lift_twist = 0.8f;
+  // Agents: a body on one foot (the other swinging) turns no further than this (rad) from that foot's planted
+  // heading (agent_move.h stance_limited_turn); it turns on at the next step. The stance foot cannot lift until the
+  // swing lands, so lift_twist cannot help there, and a body turning past the legs' ~0.9 rad of twist had IK's
+  // orientation clamp yaw the foot about its ball. Just above lift_twist, so that a foot held at it lifts early in
+  // the double support that follows. 10 turns it off.
+  float stance_twist = 0.85f;
   // Agents: a swinging foot re-aims at the newest footprint prediction until this fraction of its swing.
   float retarget_until = 0.8f;
   // Lowest cadence of a walking agent (steps/min): at a crawl the gait formula's cadence falls to 40, slow motion;

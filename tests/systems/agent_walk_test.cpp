@@ -332,6 +332,57 @@ TEST(AgentWalk, AStanceFootTwistedPastTheLegsLiftsEarly) {
   EXPECT_GT(slide[0], 1.0) << "without the lift the twisted foot is yawed on its ball";
 }
 
+// On one foot a body turns no further over it than stance_twist: the turn that would twist the foot further is cut
+// to the limit, one that untwists it is whole, and a foot already past the limit is not twisted more.
+TEST(AgentWalk, ABodyOnOneFootTurnsOnlyAsFarAsTheLegTwists) {
+  const float limit = 0.85f;
+  EXPECT_FLOAT_EQ(stance_limited_turn(0.5f, 0.1f, 0.0f, limit), 0.1f) << "within the limit";
+  EXPECT_NEAR(stance_limited_turn(0.8f, 0.1f, 0.0f, limit), 0.05f, 1e-6f) << "cut at the limit";
+  EXPECT_NEAR(stance_limited_turn(-0.8f, -0.1f, 0.0f, limit), -0.05f, 1e-6f) << "either way";
+  EXPECT_FLOAT_EQ(stance_limited_turn(0.9f, 0.05f, 0.0f, limit), 0.0f) << "already past: held";
+  EXPECT_FLOAT_EQ(stance_limited_turn(0.9f, -0.05f, 0.0f, limit), -0.05f) << "untwisting is whole";
+  // Headings wrap: a foot planted at 3.0 rad under a body at -3.0 is twisted 0.28 rad, not 6.0.
+  EXPECT_FLOAT_EQ(stance_limited_turn(-3.0f, 0.1f, 3.0f, limit), 0.1f);
+  EXPECT_NEAR(stance_limited_turn(-3.0f, 0.7f, 3.0f, limit), limit - (6.2831853f - 6.0f), 1e-5f);
+
+  // Edging along at 0.3 m/s (the agents' cadence floor: stances of ~0.9 s) with a wish that keeps turning at
+  // 1.6 rad/s, faster than the footprints' predictions assume: over a foot in single support the body's twist
+  // stays within the limit, and without the rule it went past what the legs twist.
+  // Runs: the rule off (the early lift of a twisted foot on, which cannot act on one foot); the rule alone; both
+  // (the default: a foot held at the limit lifts in the double support that follows).
+  float worst[3] = {0.0f, 0.0f, 0.0f};
+  double slide[3] = {0.0, 0.0, 0.0};
+  for (int rule = 0; rule < 3; ++rule) {
+    AgentWalker w;
+    if (rule == 0) w.crowd->motion.style.stance_twist = 10.0f;  // off
+    if (rule == 1) w.crowd->motion.style.lift_twist = 10.0f;
+    w.move = AgentMoveParameters::of(w.crowd->motion.style);
+    GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
+    const float dt = 1.0f / 60.0f;
+    for (int f = 0; f < 900; ++f) {
+      const float angle = f < 60 ? 0.0f : 1.6f * static_cast<float>(f - 60) * dt;
+      w.frame(0.3f * glm::vec2(std::sin(angle), std::cos(angle)), dt);
+      metrics.observe(walker_lanes(w.table(), w.crowd->joint_count()), w.crowd->motion.paths, dt);
+      for (int leg = 0; leg < 2; ++leg) {
+        const auto c = [&](int l, std::uint32_t k) { return w.gait(kGaitLegs + static_cast<std::uint32_t>(l) * kLegFloats + k); };
+        if (c(leg, kLegSwinging) < 0.5f && c(1 - leg, kLegSwinging) > 0.5f)
+          worst[rule] = std::max(worst[rule], std::abs(wrap_angle(w.agent(kAgentHeading) - c(leg, kLegPlantHeading))));
+      }
+      for (std::uint32_t c = 0; c < kAgentFloats; ++c) ASSERT_TRUE(std::isfinite(w.agent(c)));
+    }
+    slide[rule] = metrics.report().foot_slide_mm_max;
+  }
+  std::printf("wish turning at 1.6 rad/s: twist on one foot %.2f rad without the rule, %.2f with it alone, %.2f with "
+              "the early lift too; foot slide %.2f / %.2f / %.2f mm\n", worst[0], worst[1], worst[2], slide[0],
+              slide[1], slide[2]);
+  EXPECT_GT(worst[0], 0.9f) << "without it the body turns on past the legs' twist";
+  EXPECT_GT(slide[0], 1.0) << "and IK's clamp yaws the foot";
+  EXPECT_LE(worst[1], limit + 1e-4f);
+  EXPECT_LE(worst[2], limit + 1e-4f);
+  EXPECT_LT(slide[1], slide[0]);
+  EXPECT_LT(slide[2], 1.0);
+}
+
 // A walker settling into (or leaving) its idle stance stands with its feet side by side and flat: its body does not
 // turn towards a wish too slow to walk, which twisted the legs over the planted feet (past max_foot_twist a flat
 // foot cannot pivot) and slid the toes by up to 3 cm in the crossing.
