@@ -81,8 +81,13 @@ struct CrowdAgents {
   // backing into the one behind loses its right of way (right_of_way_back_fade): with 0.25 m bodies a push at the
   // bottleneck's door otherwise ran back along a file of agents into the room's corner (a pair overlapping in 2 of
   // 12 seeds; none with the fade).
-  AvoidanceParameters avoidance{
-      .right_of_way = 0.49f, .right_of_way_back_fade = 0.2f, .make_way = true, .passing_angle = 0.3f};
+  // A walker backing off against its wish is counted on for no more than 0.5 m/s of it (back_off_limit): pinned
+  // against a wall by one coming the other way it was moved back at up to 1.7 m/s, its feet dragging.
+  AvoidanceParameters avoidance{.right_of_way = 0.49f,
+                                .right_of_way_back_fade = 0.2f,
+                                .make_way = true,
+                                .passing_angle = 0.3f,
+                                .back_off_limit = 0.5f};
   SteeringParameters steering;
   AgentMoveParameters move;
   // Avoidance keeps discs this much wider than the bodies. 6 cm packed dense crowds so tight that far more of them

@@ -426,12 +426,19 @@ struct Inverses {
   explicit Inverses(const AvoidanceParameters& p) : tau(1.0f / p.time_horizon), dt(1.0f / p.dt) {}
 };
 
+// The velocities the first pass's half-planes are set about: each agent's back_off_velocity (the current velocity
+// when back_off_limit is off).
+struct PlaneVelocities {
+  const float* x;
+  const float* z;
+};
+
 HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j, const FirstPass* first,
-                      const Inverses& inverse, float right_of_way_shift) {
+                      const PlaneVelocities& plane_v, const Inverses& inverse, float right_of_way_shift) {
   const AvoidanceParameters& prm = job.params;
   const vec2 pi(job.px[i], job.pz[i]), pj(job.px[j], job.pz[j]);
-  const vec2 vi = first ? vec2(first->vx[i], first->vz[i]) : vec2(job.vx[i], job.vz[i]);
-  vec2 vj = first ? vec2(first->vx[j], first->vz[j]) : vec2(job.vx[j], job.vz[j]);
+  const vec2 vi = first ? vec2(first->vx[i], first->vz[i]) : vec2(plane_v.x[i], plane_v.z[i]);
+  vec2 vj = first ? vec2(first->vx[j], first->vz[j]) : vec2(plane_v.x[j], plane_v.z[j]);
   float share = first && first->infeasible[j] == 0 ? 1.0f : 0.5f;
   // A neighbour holding still this step takes no part: this agent avoids it wholly, where it stands. Counted on for
   // half, it stayed put while this one moved as if it would not (the crossing: agents held still 19,359 agent-steps
@@ -680,7 +687,8 @@ vec2 passing_preferred(const AvoidanceJob& job, std::uint32_t i, const Neighbour
 // Agent i's new velocity from its chosen neighbours (sorted) and obstacle edges.
 template <class ForEachEdge>
 vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighbours, std::uint32_t neighbour_count,
-                 const ForEachEdge& for_each_edge, const FirstPass* first, bool& infeasible,
+                 const ForEachEdge& for_each_edge, const FirstPass* first, const PlaneVelocities& plane_v,
+                 bool& infeasible,
                  vec2* preferred_out = nullptr) {
   if (!job.holds.empty() && job.holds[i] != 0) {  // it stays where it is: its neighbours avoid it wholly
     infeasible = false;
@@ -700,7 +708,8 @@ vec2 solve_agent(const AvoidanceJob& job, std::uint32_t i, const Nearest* neighb
   std::array<float, kAvoidanceMaxNeighbors> shift;
   if (right_of_way) right_of_way_shifts(job, i, batch, shift.data());
   for (std::uint32_t k = 0; k < neighbour_count; ++k)
-    planes[count++] = agent_plane(job, i, neighbours[k].index(), first, inverse, right_of_way ? shift[k] : 0.0f);
+    planes[count++] =
+        agent_plane(job, i, neighbours[k].index(), first, plane_v, inverse, right_of_way ? shift[k] : 0.0f);
 
   const float max_speed = job.max_speed[i];
   const vec2 preferred = preferred_kept ? vec2(first->preferred_x[i], first->preferred_z[i])
@@ -805,6 +814,7 @@ bool validate_job(const AvoidanceJob& job, bool need_scratch) {
   if (p.max_neighbors == 0 || p.max_neighbors > kAvoidanceMaxNeighbors) return false;
   if (!(p.right_of_way >= 0.0f && p.right_of_way <= 0.5f)) return false;  // NaN too
   if (!(p.right_of_way_back_fade >= 0.0f && std::isfinite(p.right_of_way_back_fade))) return false;
+  if (!std::isfinite(p.back_off_limit)) return false;  // negative is off
   // A turn past a right angle would walk away from the goal; NaN or a negative margin or gap never compares true.
   if (!(std::abs(p.passing_angle) <= 1.5707964f) || !(p.passing_margin >= 0.0f && std::isfinite(p.passing_margin)) ||
       !(p.passing_full_gap >= 0.0f && std::isfinite(p.passing_full_gap)))
@@ -965,6 +975,8 @@ bool AvoidanceJob::run() const {
     s.kept_count.resize(n);
     s.kept_preferred_x.resize(n);
     s.kept_preferred_z.resize(n);
+    s.plane_vx.resize(n);
+    s.plane_vz.resize(n);
   }
   if (s.kept_neighbors.size() < n * params.max_neighbors) s.kept_neighbors.resize(n * params.max_neighbors);
   // Padded by a run's width: the search reads whole runs of four past a row's last candidate (masked off).
@@ -976,6 +988,21 @@ bool AvoidanceJob::run() const {
     const std::uint32_t c = g.cell_of(px[i], pz[i]);
     s.agent_cell[i] = c;
     ++s.cell_start[c + 1];
+  }
+  // Off (the paper's), the half-planes read the current velocities themselves. On, a copy, changed only for the
+  // agents backing off faster than the limit (rarely any).
+  PlaneVelocities plane_v{vx.data(), vz.data()};
+  if (params.back_off_limit >= 0.0f) {
+    std::copy(vx.begin(), vx.end(), s.plane_vx.begin());
+    std::copy(vz.begin(), vz.end(), s.plane_vz.begin());
+    for (std::size_t i = 0; i < n; ++i) {
+      // back_off_velocity's own early test first, inline: most agents go their way.
+      if (vx[i] * pref_vx[i] + vz[i] * pref_vz[i] >= 0.0f) continue;
+      const vec2 v = back_off_velocity({vx[i], vz[i]}, {pref_vx[i], pref_vz[i]}, params.back_off_limit);
+      s.plane_vx[i] = v.x;
+      s.plane_vz[i] = v.y;
+    }
+    plane_v = {s.plane_vx.data(), s.plane_vz.data()};
   }
   for (std::size_t c = 1; c <= cells; ++c) s.cell_start[c] += s.cell_start[c - 1];
   // Fill from the back: cell_start[c + 1] (cell c's end) counts down to cell c's begin, so descending i lands in
@@ -1127,7 +1154,7 @@ bool AvoidanceJob::run() const {
         };
         bool infeasible = false;
         vec2 preferred(0.0f);
-        const vec2 v = solve_agent(*this, i, nearest.data(), count, edges, first, infeasible, &preferred);
+        const vec2 v = solve_agent(*this, i, nearest.data(), count, edges, first, plane_v, infeasible, &preferred);
         if (first == nullptr) {
           s.infeasible[i] = infeasible ? 1 : 0;
           if (infeasible) {
@@ -1160,6 +1187,16 @@ bool AvoidanceJob::run() const {
   return true;
 }
 
+glm::vec2 back_off_velocity(glm::vec2 v, glm::vec2 preferred, float limit) {
+  if (!(limit >= 0.0f)) return v;
+  const float p2 = preferred.x * preferred.x + preferred.y * preferred.y;
+  const float against = -(v.x * preferred.x + v.y * preferred.y);  // the speed against it, times |preferred|
+  // No square root unless it binds: against > limit |p|  <=>  against > 0 and against^2 > limit^2 p2.
+  if (!(p2 > 1e-8f) || !(against > 0.0f) || !(against * against > limit * limit * p2)) return v;
+  const float length = std::sqrt(p2);
+  return v + ((against / length - limit) / length) * preferred;
+}
+
 bool run_avoidance_reference(const AvoidanceJob& job) {
   if (!validate_job(job, false)) return false;
   const std::size_t n = job.px.size();
@@ -1168,6 +1205,13 @@ bool run_avoidance_reference(const AvoidanceJob& job) {
   std::vector<std::uint8_t> infeasible(n, 0);  // the twin may allocate: it is for tests
   std::vector<float> first_vx(n), first_vz(n);
   const FirstPass second{first_vx.data(), first_vz.data(), infeasible.data()};
+  std::vector<float> plane_vx(n), plane_vz(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const vec2 v = back_off_velocity({job.vx[i], job.vz[i]}, {job.pref_vx[i], job.pref_vz[i]}, job.params.back_off_limit);
+    plane_vx[i] = v.x;
+    plane_vz[i] = v.y;
+  }
+  const PlaneVelocities plane_v{plane_vx.data(), plane_vz.data()};
   for (const FirstPass* first : {static_cast<const FirstPass*>(nullptr), &second}) {
     if (first != nullptr) {
       if (!job.params.second_pass || std::find(infeasible.begin(), infeasible.end(), 1) == infeasible.end()) break;
@@ -1188,7 +1232,7 @@ bool run_avoidance_reference(const AvoidanceJob& job) {
         for (std::uint32_t e = 0; e < job.obstacles->edges().size(); ++e) visit(e);
       };
       bool failed = false;
-      const vec2 v = solve_agent(job, i, nearest.data(), count, edges, first, failed);
+      const vec2 v = solve_agent(job, i, nearest.data(), count, edges, first, plane_v, failed);
       if (first == nullptr) infeasible[i] = failed ? 1 : 0;
       job.new_vx[i] = v.x;
       job.new_vz[i] = v.y;

@@ -372,6 +372,52 @@ TEST(Avoidance, HeadOnAlongAWallNobodyStuck) {
   EXPECT_GE(clearance, -0.01f);
 }
 
+// Backing off (AvoidanceParameters::back_off_limit). A pair met head-on, the first already moving back at 0.9 m/s
+// against its wish, the other closing on it at 1.4 m/s. With the half-planes set about the current velocities (the
+// paper's), the first must go on backing off at least as fast, straight back, while the other slows by a few cm/s:
+// nothing in the next step's half-planes lets either step aside. Set about a back-off of at most 0.4 m/s, the pair
+// is further inside its velocity obstacle, whose nearest way out is then to the side: the first steps aside and
+// goes its way. (Seen in the plaza: a walker going round the fountain, met by one coming the other way round, was
+// moved straight back along the wall at up to 1.5-1.7 m/s for over a second.) Neither overlaps the other after.
+TEST(Avoidance, AWalkerBackingOffIsNotDrivenBackAtWalkingPace) {
+  vec2 first[2], second[2];
+  float closest[2] = {9.0f, 9.0f};
+  for (int rule = 0; rule < 2; ++rule) {
+    Crowd c;
+    c.params.back_off_limit = rule == 0 ? -1.0f : 0.4f;
+    c.add({0.0f, 0.0f}, {-20.0f, 0.0f}, 0.25f, 1.4f);  // wants -x
+    c.add({-1.2f, 0.0f}, {20.0f, 0.0f}, 0.25f, 1.4f);  // wants +x, towards it
+    c.vx = {0.9f, 1.4f};                                // the first moving back along +x
+    AvoidanceScratch scratch;
+    for (int step = 0; step < 60; ++step) {
+      ASSERT_TRUE(c.step(scratch, nullptr, kDt));
+      if (step == 0) {
+        first[rule] = {c.vx[0], c.vz[0]};
+        second[rule] = {c.vx[1], c.vz[1]};
+      }
+      ASSERT_EQ(c.overlaps(), 0) << "step " << step;
+      const vec2 gap = c.position(0) - c.position(1);
+      closest[rule] = std::min(closest[rule], std::sqrt(gap.x * gap.x + gap.y * gap.y));
+    }
+  }
+  std::printf("backing off at 0.9 m/s, met at 1.4: next step (%.3f, %.3f) and (%.3f, %.3f) m/s with the paper's "
+              "v_opt, (%.3f, %.3f) and (%.3f, %.3f) with the limit\n", first[0].x, first[0].y, second[0].x,
+              second[0].y, first[1].x, first[1].y, second[1].x, second[1].y);
+  EXPECT_GE(first[0].x, 0.9f) << "the paper's: it must keep backing off at least as fast";
+  EXPECT_NEAR(first[0].y, 0.0f, 1e-5f) << "straight back";
+  EXPECT_GT(second[0].x, 1.3f) << "while the other barely slows";
+  EXPECT_LT(first[1].x, 0.0f) << "with the limit it goes its way again";
+  EXPECT_GT(std::abs(first[1].y), 0.3f) << "stepping aside";
+  EXPECT_GE(closest[1], 0.5f - 0.01f);
+  // Off by default: the paper's v_opt, bit for bit.
+  EXPECT_EQ(strata::back_off_velocity({0.3f, -1.2f}, {0.0f, 1.0f}, -1.0f), vec2(0.3f, -1.2f));
+  const vec2 limited = strata::back_off_velocity({0.3f, -1.2f}, {0.0f, 2.0f}, 0.4f);
+  EXPECT_FLOAT_EQ(limited.x, 0.3f) << "only the part against the preferred velocity changes";
+  EXPECT_FLOAT_EQ(limited.y, -0.4f);
+  EXPECT_EQ(strata::back_off_velocity({0.3f, -0.2f}, {0.0f, 1.0f}, 0.4f), vec2(0.3f, -0.2f)) << "within the limit";
+  EXPECT_EQ(strata::back_off_velocity({0.3f, 1.2f}, {0.0f, 1.0f}, 0.4f), vec2(0.3f, 1.2f)) << "going its way";
+}
+
 // A room 8 x 8 m emptying through one 1.4 m door in its east wall: 24 agents, each aiming at the doorway first
 // (the caller's navigation would), then at a goal outside. All leave and reach their goals, never overlapping,
 // never inside a wall.
@@ -437,6 +483,7 @@ TEST(Avoidance, JobEqualsBruteForceReference) {
     job.params.right_of_way = right_of_way;
     job.params.passing_angle = right_of_way > 0.0f ? 0.3f : 0.0f;  // the crowds' settings together
     job.params.right_of_way_back_fade = right_of_way > 0.0f ? 0.2f : 0.0f;
+    job.params.back_off_limit = right_of_way > 0.0f ? 0.4f : -1.0f;
     ASSERT_TRUE(job.run());
     const std::vector<float> fast_x = c.new_vx, fast_z = c.new_vz;
     std::fill(c.new_vx.begin(), c.new_vx.end(), -99.0f);
