@@ -728,6 +728,11 @@ TEST(Avoidance, ValidateRefusesBadInputAndWritesNothing) {
       job.params.passing_angle = angle;
       refused_untouched(c, job);
     }
+    for (const float limit : {nan, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()}) {
+      job = c.job(scratch);
+      job.params.back_off_limit = limit;  // negative and finite is off; these are nothing
+      refused_untouched(c, job);
+    }
     for (const float length : {-0.1f, nan, std::numeric_limits<float>::infinity()}) {
       job = c.job(scratch);
       job.params.passing_margin = length;
