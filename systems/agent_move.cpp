@@ -156,7 +156,8 @@ bool AgentMoveJob::validate() const {
     return false;
   if (agent.overlaps(corners) || agent.overlaps(gait) || agent.overlaps(state)) return false;
   if (!std::isfinite(dt) || dt < 0.0f || !(params.turn_rate > 0.0f) || !(params.turn_in_place_rate > 0.0f) ||
-      !(params.acceleration > 0.0f) || !(params.braking > 0.0f) || !(params.progress_step > 0.0f))
+      !(params.acceleration > 0.0f) || !(params.braking > 0.0f) || !(params.progress_step > 0.0f) ||
+      !(params.stance_twist >= 0.0f))  // NaN too: a NaN limit would turn the heading to NaN
     return false;
   // A non-finite avoidance velocity would move the agent to NaN: refuse it rather than propagate.
   for (std::size_t i = 0; i < n; ++i)

@@ -541,5 +541,20 @@ TEST(AgentWalk, AgentMoveRefusesNonFiniteVelocities) {
   EXPECT_EQ(w.agent(kAgentPx), before);
 }
 
+TEST(AgentWalk, AgentMoveRefusesABadStanceTwist) {
+  AgentWalker w;
+  SoaTable& t = w.table();
+  const float before = w.agent(kAgentPx);
+  for (const float limit : {std::nanf(""), -0.1f}) {
+    AgentMoveParameters p = w.move;
+    p.stance_twist = limit;
+    EXPECT_FALSE(make_agent_move_job(t, 1.0f / 60.0f, p).run()) << limit;
+    EXPECT_EQ(w.agent(kAgentPx), before);
+  }
+  AgentMoveParameters off = w.move;
+  off.stance_twist = 10.0f;  // off, as the tests above use it
+  EXPECT_TRUE(make_agent_move_job(t, 1.0f / 60.0f, off).run());
+}
+
 }  // namespace
 }  // namespace strata
