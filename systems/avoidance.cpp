@@ -433,6 +433,15 @@ struct PlaneVelocities {
   const float* z;
 };
 
+// Every agent's back_off_velocity into x[0..n), z[0..n): the job (into its scratch) and the twin read the same.
+void fill_back_off_velocities(const AvoidanceJob& job, float* x, float* z) {
+  for (std::size_t i = 0; i < job.vx.size(); ++i) {
+    const vec2 v = back_off_velocity({job.vx[i], job.vz[i]}, {job.pref_vx[i], job.pref_vz[i]}, job.params.back_off_limit);
+    x[i] = v.x;
+    z[i] = v.y;
+  }
+}
+
 HalfPlane agent_plane(const AvoidanceJob& job, std::uint32_t i, std::uint32_t j, const FirstPass* first,
                       const PlaneVelocities& plane_v, const Inverses& inverse, float right_of_way_shift) {
   const AvoidanceParameters& prm = job.params;
@@ -989,19 +998,10 @@ bool AvoidanceJob::run() const {
     s.agent_cell[i] = c;
     ++s.cell_start[c + 1];
   }
-  // Off (the paper's), the half-planes read the current velocities themselves. On, a copy, changed only for the
-  // agents backing off faster than the limit (rarely any).
+  // Off (the paper's), the half-planes read the current velocities themselves.
   PlaneVelocities plane_v{vx.data(), vz.data()};
   if (params.back_off_limit >= 0.0f) {
-    std::copy(vx.begin(), vx.end(), s.plane_vx.begin());
-    std::copy(vz.begin(), vz.end(), s.plane_vz.begin());
-    for (std::size_t i = 0; i < n; ++i) {
-      // back_off_velocity's own early test first, inline: most agents go their way.
-      if (vx[i] * pref_vx[i] + vz[i] * pref_vz[i] >= 0.0f) continue;
-      const vec2 v = back_off_velocity({vx[i], vz[i]}, {pref_vx[i], pref_vz[i]}, params.back_off_limit);
-      s.plane_vx[i] = v.x;
-      s.plane_vz[i] = v.y;
-    }
+    fill_back_off_velocities(*this, s.plane_vx.data(), s.plane_vz.data());
     plane_v = {s.plane_vx.data(), s.plane_vz.data()};
   }
   for (std::size_t c = 1; c <= cells; ++c) s.cell_start[c] += s.cell_start[c - 1];
@@ -1206,11 +1206,7 @@ bool run_avoidance_reference(const AvoidanceJob& job) {
   std::vector<float> first_vx(n), first_vz(n);
   const FirstPass second{first_vx.data(), first_vz.data(), infeasible.data()};
   std::vector<float> plane_vx(n), plane_vz(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const vec2 v = back_off_velocity({job.vx[i], job.vz[i]}, {job.pref_vx[i], job.pref_vz[i]}, job.params.back_off_limit);
-    plane_vx[i] = v.x;
-    plane_vz[i] = v.y;
-  }
+  fill_back_off_velocities(job, plane_vx.data(), plane_vz.data());
   const PlaneVelocities plane_v{plane_vx.data(), plane_vz.data()};
   for (const FirstPass* first : {static_cast<const FirstPass*>(nullptr), &second}) {
     if (first != nullptr) {
