@@ -134,6 +134,9 @@ int run_gait_report(const GaitReportOptions& o) {
     j["cadence_min"] = r.cadence_min;
     j["cadence_max"] = r.cadence_max;
     j["swing_clearance_min_mm"] = r.swing_clearance_min_mm;
+    j["body_speed_max_mps"] = r.body_speed_max_mps;
+    j["body_accel_max_mps2"] = r.body_accel_max_mps2;
+    j["body_jolts"] = r.body_jolts;
     j["targets_met"] = slide_ok && ik_ok && limits_ok && nan_ok && stride_ok;
     std::optional<GaitCycleSection> cycle;
     if (o.gait_cycle) {
@@ -158,8 +161,10 @@ int run_gait_report(const GaitReportOptions& o) {
     line("limit_violations", static_cast<double>(r.limit_violations), "0", limits_ok);
     line("nan_count", static_cast<double>(r.nan_count), "0", nan_ok);
     line("stride_length_error_pct", r.stride_length_error_pct, "< 2", stride_ok);
-    std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m, swing clearance >= %.0f mm\n",
-                r.pelvis_bob_cm_mean, r.stride_length_mean_m, r.swing_clearance_min_mm);
+    std::printf("pelvis bob %.1f cm peak to peak (mean), mean stride %.3f m, swing clearance >= %.0f mm; bodies at "
+                "most %.2f m/s, %.1f m/s^2, %llu walker-frames past %.0f m/s^2\n",
+                r.pelvis_bob_cm_mean, r.stride_length_mean_m, r.swing_clearance_min_mm, r.body_speed_max_mps,
+                r.body_accel_max_mps2, static_cast<unsigned long long>(r.body_jolts), kBodyJoltAccel);
     if (cycle) {
       const nlohmann::json& c = cycle->json["gait_cycle"];
       const nlohmann::json& f = c["features"];

@@ -169,6 +169,9 @@ int run_crowd_report(const CrowdReportOptions& o) {
       g.foot_slide_mm_max = largest(dist->all_gather(g.foot_slide_mm_max));
       g.nan_count = static_cast<std::uint64_t>(total(dist->all_gather(static_cast<double>(g.nan_count))));
       g.ik_unreachable = static_cast<std::uint64_t>(total(dist->all_gather(static_cast<double>(g.ik_unreachable))));
+      g.body_speed_max_mps = largest(dist->all_gather(g.body_speed_max_mps));
+      g.body_accel_max_mps2 = largest(dist->all_gather(g.body_accel_max_mps2));
+      g.body_jolts = static_cast<std::uint64_t>(total(dist->all_gather(static_cast<double>(g.body_jolts))));
       const std::vector<double> avoidance_per_rank = dist->all_gather(avoidance_mean);
       const std::vector<double> navigation_per_rank = dist->all_gather(navigation_mean);
       avoidance_mean = largest(avoidance_per_rank);
@@ -208,6 +211,9 @@ int run_crowd_report(const CrowdReportOptions& o) {
     j["navigation_mesh"] = {{"polygons", nav.polygons}, {"bytes", nav.bytes}, {"from_cache", nav.from_cache},
                             {"build_ms", nav.build_ms}, {"load_ms", nav.load_ms}};
     j["ik_unreachable_limb_frames"] = g.ik_unreachable;
+    j["body_speed_max_mps"] = g.body_speed_max_mps;
+    j["body_accel_max_mps2"] = g.body_accel_max_mps2;
+    j["body_jolts"] = g.body_jolts;
     j["targets_met"] = ok;
     nlohmann::json systems = nlohmann::json::array();
     for (const SystemStats& s : profiler.stats())
@@ -226,6 +232,9 @@ int run_crowd_report(const CrowdReportOptions& o) {
     line("stuck_agents", static_cast<double>(r.stuck_agents), "0", r.stuck_agents == 0);
     line("foot_slide_mm_max", g.foot_slide_mm_max, "< 1", g.foot_slide_mm_max < 1.0);
     line("nan_count", static_cast<double>(nans), "0", nans == 0);
+    std::printf("bodies: fastest %.2f m/s, sharpest change %.1f m/s^2, %llu walker-frames past %.0f m/s^2\n",
+                g.body_speed_max_mps, g.body_accel_max_mps2, static_cast<unsigned long long>(g.body_jolts),
+                kBodyJoltAccel);
     std::printf("time to goal %.1f s mean, %.1f s p95; avoidance %.3f ms/step mean, %.3f p95; navigation mesh %.1f ms "
                 "(%s), planning %.3f ms/step\n",
                 r.time_to_goal_mean_s, r.time_to_goal_p95_s, avoidance_mean, percentile(avoidance_ms, 0.95),

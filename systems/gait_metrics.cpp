@@ -120,6 +120,23 @@ void GaitMetrics::observe(const WalkerLanes& l, const std::vector<CardinalSpline
     const float root_y = l.root_translation[1 * s + w] * scale;
     track.root_min = std::min(track.root_min, root_y);
     track.root_max = std::max(track.root_max, root_y);
+    if (dt > 0.0f) {
+      const glm::vec3 root = world_joint(l, w, 0);
+      const glm::vec2 now(root.x, root.z);
+      if (track.root_seen >= 1) {
+        const glm::vec2 v = (now - track.root_xz[1]) / dt;
+        report_.body_speed_max_mps = std::max<double>(report_.body_speed_max_mps, glm::length(v));
+        if (track.root_seen >= 2) {
+          const glm::vec2 before = (track.root_xz[1] - track.root_xz[0]) / dt;
+          const double accel = glm::length(v - before) / dt;
+          report_.body_accel_max_mps2 = std::max(report_.body_accel_max_mps2, accel);
+          report_.body_jolts += accel > kBodyJoltAccel;
+        }
+      }
+      track.root_xz[0] = track.root_xz[1];
+      track.root_xz[1] = now;
+      track.root_seen = std::min(track.root_seen + 1, 2);
+    }
 
     const float height = l.gait[kGaitHeight * s + w];
     const GaitParameters gp = gait_parameters(height, std::clamp(cadence, kMinCadence, kMaxCadence));

@@ -14,6 +14,10 @@
 
 namespace strata {
 
+// A body's horizontal acceleration (m/s^2) past which GaitReport::body_jolts counts a frame: about 1 g, five times
+// what a walk's own pelvis shows, a third of a metre a second gained or lost in one 30 fps frame.
+inline constexpr double kBodyJoltAccel = 10.0;
+
 struct GaitReport {
   std::size_t walkers = 0;
   std::size_t frames = 0;
@@ -35,6 +39,13 @@ struct GaitReport {
   double pelvis_bob_cm_mean = 0;            // per walker peak-to-peak root height over the run, averaged
   double cadence_min = 0, cadence_max = 0;  // steps/min seen
   double swing_clearance_min_mm = 0;        // lowest toe tip or heel over the middle of any swing (20-80 %)
+  // The body over the ground: the root joint's horizontal speed between two frames and its change between three
+  // (world metres, seconds). A walk's pelvis moves at the walk's speed give or take its sway, and changes it by
+  // 1-2 m/s^2; a body jerked to a foot it cannot otherwise reach, or stopped dead by one, changes it by far more
+  // in a single frame, which no foot-slide figure shows. body_jolts counts walker-frames past kBodyJoltAccel.
+  double body_speed_max_mps = 0;
+  double body_accel_max_mps2 = 0;
+  std::uint64_t body_jolts = 0;
 };
 
 class GaitMetrics {
@@ -72,6 +83,9 @@ class GaitMetrics {
   struct WalkerTrack {
     LegTrack legs[2];
     float root_min = 1e9f, root_max = -1e9f;
+    // The root's last two horizontal positions (world), for the body's speed and acceleration; how many are held.
+    glm::vec2 root_xz[2];
+    int root_seen = 0;
     std::size_t last_frame = 0;  // report_.frames of the last call that saw it; 0: never seen
   };
   const Skeleton& skeleton_;

@@ -175,6 +175,11 @@ TEST(AgentWalk, StartsWalksTurnsStopsAndStartsAgainWithoutSliding) {
         << "ball " << g.foot_slide_ball_mm_max << " ankle " << g.foot_slide_ankle_mm_max << " heel "
         << g.foot_slide_heel_mm_max << " tip " << g.foot_slide_tip_mm_max;
   }
+  // Stopping, the body changes its pace as a person's does (5.6 m/s^2 at most). Not yet the rest: leaving the
+  // idle stance the body goes from still to start_speed in a frame (11 m/s^2 at 60 fps), the 90-degree turn
+  // jolts it three times (up to 36 m/s^2), and walking off after turning round comes to 9.8 (docs/crowds.md,
+  // "How the bodies move").
+  EXPECT_EQ(stop.gait.body_jolts, 0u) << "sharpest change " << stop.gait.body_accel_max_mps2 << " m/s^2";
   EXPECT_GT(back.gait.strides, 2u);
 }
 
@@ -530,6 +535,35 @@ TEST(AgentWalk, ACarriedBackBodyStepsBackWithItsFeetDown) {
     EXPECT_LT(w.agent(kAgentPz), 1.6f) << "it went back";
     EXPECT_LT(r.foot_slide_mm_max, 1.0);
   }
+}
+
+// The body's own motion is measured too: a walk's pelvis keeps its speed give or take its sway, and a body moved
+// 10 cm off its walk for one frame (its placement shifted after FK, as a yank to an unreachable foot would) is
+// counted as a jolt, both ways, with the speed it showed.
+TEST(AgentWalk, GaitMetricsCountABodyJerkedOffItsWalk) {
+  AgentWalker w;
+  const LocomotionRig& rig = *w.crowd->motion.locomotion;
+  float clock = 0.0f;
+  constexpr float dt = 1.0f / 60.0f;
+  GaitMetrics start(w.crowd->rig().skeleton, rig, w.crowd->motion.style);
+  walk(w, 3.0f, [](float) { return glm::vec2(0.0f, 1.3f); }, start, clock, dt);
+  GaitMetrics smooth(w.crowd->rig().skeleton, rig, w.crowd->motion.style);
+  const GaitReport walking = walk(w, 2.0f, [](float) { return glm::vec2(0.0f, 1.3f); }, smooth, clock, dt).gait;
+  EXPECT_EQ(walking.body_jolts, 0u);
+  EXPECT_LT(walking.body_accel_max_mps2, kBodyJoltAccel / 2.0);
+  EXPECT_GT(walking.body_speed_max_mps, 1.2);
+  EXPECT_LT(walking.body_speed_max_mps, 1.6);
+
+  GaitMetrics jerked(w.crowd->rig().skeleton, rig, w.crowd->motion.style);
+  for (int f = 0; f < 60; ++f) {
+    w.frame({0.0f, 1.3f}, dt);
+    if (f == 30) w.table().f32(kWalkerPlacement, 0)[0] += 0.1f;  // x, this frame only: locomotion rewrites it
+    jerked.observe(walker_lanes(w.table(), w.crowd->joint_count()), w.crowd->motion.paths, dt);
+  }
+  const GaitReport r = jerked.report();
+  EXPECT_GE(r.body_jolts, 2u) << "off and back";
+  EXPECT_GT(r.body_speed_max_mps, 0.1 / dt * 0.9);
+  EXPECT_GT(r.body_accel_max_mps2, kBodyJoltAccel);
 }
 
 TEST(AgentWalk, AgentMoveRefusesNonFiniteVelocities) {
