@@ -582,6 +582,39 @@ bool unreachable(const LocomotionColumns& lanes, int leg, std::size_t i) {
   return (lanes.ik_flags.at(static_cast<std::uint32_t>(leg), i) & (kIkUnreachable | kIkLimitsInfeasible)) != 0u;
 }
 
+// Whether IK will hold leg `leg`'s ankle on `goal` with the foot at `orientation` (humanoid space, as written for
+// this frame) under the local rotations and root translation locomotion wrote for walker i: solve_limb asked as the
+// IK system will ask it (the hip's parent frame composed from the root down), its flags read. In float where the
+// system works in double: a goal within rounding of a limit may read either way, which only moves a lift by a frame.
+bool stance_foot_holds(const LocomotionRig& rig, const LocomotionColumns& lanes, std::size_t i, int leg,
+                       const glm::vec3& root_translation, const glm::vec3& goal, const glm::quat& orientation) {
+  const Skeleton& sk = rig.skeleton;
+  const LimbChain& limb = rig.limbs[leg == 0 ? kLeftLeg : kRightLeg];
+  // The hip's ancestors, root first.
+  std::int32_t chain[kMaxJointsPerRig];
+  int depth = 0;
+  for (std::int32_t j = sk.parents[limb.upper]; j >= 0 && depth < static_cast<int>(kMaxJointsPerRig); j = sk.parents[j])
+    chain[depth++] = j;
+  glm::mat3 m(1.0f);
+  glm::vec3 offset = root_translation;
+  for (int k = depth - 1; k >= 0; --k) {
+    const auto j = static_cast<std::uint32_t>(chain[k]);
+    const glm::quat q(lanes.local_rotation.at(j * 4 + 3, i), lanes.local_rotation.at(j * 4 + 0, i),
+                      lanes.local_rotation.at(j * 4 + 1, i), lanes.local_rotation.at(j * 4 + 2, i));
+    const glm::mat3 r = glm::mat3_cast(q);
+    const glm::vec3 c = sk.centers[j];
+    offset = k == depth - 1 ? c - r * c + root_translation : m * (c - r * c) + offset;
+    m = k == depth - 1 ? r : m * r;
+  }
+  const glm::mat3 to_rest = glm::transpose(m);
+  LimbSolveInput in;
+  in.mode = IkMode::PositionOrientation;
+  in.goal = to_rest * (goal - offset);
+  in.orientation = glm::quat_cast(to_rest * glm::mat3_cast(orientation));
+  in.pole = limb.pole;
+  return (solve_limb(sk, limb, in).flags & (kIkUnreachable | kIkLimitsInfeasible)) == 0u;
+}
+
 // Whether a stance leg at leg phase psi (stance fraction sf) that its leg cannot reach lifts early
 // (GaitStyle::early_lift): past that fraction of its stance, and after the other foot is down (psi 0.5; with a
 // margin, which the heel-strike test, psi < 0.5, also needs).
@@ -1131,8 +1164,20 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       const float most = kReachUsed * rig.leg_reach[leg], length = glm::length(reach);
       if (length > most) goal = hip + reach * (most / length);
     }
-    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, goal, frame.to_humanoid(ankle[leg].orientation),
-               IkMode::PositionOrientation);
+    const glm::quat orientation = frame.to_humanoid(ankle[leg].orientation);
+    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, goal, orientation, IkMode::PositionOrientation);
+    // Agents: a rolling stance foot in its early-lift window (both feet down) that IK cannot hold in this very
+    // frame lifts now, from this pose, rather than next frame off IK's flags: in the frame the leg's limits first
+    // bind, IK's clamp turns the foot about the ankle, and its toe tip moved 10-35 mm along the ground before the
+    // lift (the crowds' largest slides in double support, issue 16). The swing then leaves from the pose the foot
+    // has, as the early lift's does.
+    if (source.agents() && style.lift_on_ik_miss && settle <= 0.0f && g.leg(leg, kLegSwinging) < 0.5f &&
+        g.leg(1 - leg, kLegSwinging) < 0.5f) {
+      const float psi = frac(phase - 0.5f * static_cast<float>(leg));
+      if (lifts_early(psi, sf, style) &&
+          !stance_foot_holds(rig, lanes, i, leg, root_translation, goal, orientation))
+        lift_off(leg, psi, psi / sf, strike_pitch, psi);
+    }
   }
   const float swing_scale = std::clamp(reference_steps(gp, track, scale), 0.3f, 1.6f);
   for (int arm = 0; arm < 2; ++arm) {
@@ -1152,6 +1197,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
 
 LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
   LocomotionRig rig;
+  rig.skeleton = skeleton;
   rig.limbs = make_limbs(skeleton);
   auto need = [&](const char* name) {
     const std::int32_t j = skeleton.find_joint(name);

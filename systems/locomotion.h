@@ -234,6 +234,10 @@ struct GaitStyle {
   // its swing now rather than at toe-off: its toe tip was what dragged (0.3 m at worst in the crossing). The swing
   // leaves from the pose the foot has and lands on time; 0 or above 1 turns it off.
   float early_lift = 0.8f;
+  // Agents: such a leg, with both feet down, whose pose IK cannot hold in this very frame (its reach or its joints'
+  // limits, asked of solve_limb before the IK system runs) lifts in this frame rather than the next, off IK's flags
+  // (systems/locomotion.cpp stance_foot_holds). False: only the next frame's.
+  bool lift_on_ik_miss = true;
   // Agents: a stance leg twisted further than this (rad) under a turning body, the foot on its ball where it cannot
   // pivot, lifts early too (same fraction, the other foot down): the legs' twist runs out near 0.9 rad, and IK's
   // orientation clamp then yawed the foot about its ball, the tip sliding 4-16 mm (arrivals turning into their
@@ -309,6 +313,9 @@ struct LocomotionRig {
   float stance_reach[2][kStanceKnots];
   float rig_height = 1.75f;          // stature of the rig (skull_tip, else top joint + 0.13 m)
   CardinalSpline wrist_path[2];      // closed loops in humanoid space: back, mid, front, mid
+  // The skeleton itself (centres, hierarchy, limits), for agents' stance legs that ask IK before they lift
+  // (systems/locomotion.cpp stance_foot_holds).
+  Skeleton skeleton;
 };
 
 // Throws std::invalid_argument when the skeleton lacks a limb joint or the midtarsal joints.

@@ -285,6 +285,51 @@ TEST(AgentWalk, ARollingFootOutOfReachLiftsEarly) {
 
 // Where a body faces: its wish, or, carried at a walking pace within face_side_angle of the way to its target,
 // where it goes.
+// Late in a stance with both feet down, the body carried ahead in one frame: 0.2 m is beyond what IK can hold the
+// trailing foot at (its joints' limits), 0.1 m is not. Asked before IK runs (GaitStyle::lift_on_ik_miss), the leg
+// lifts in the frame IK could not hold it, and only then; told only by IK's flags, it is still down in that frame,
+// where IK's clamp turns the foot about the ankle (in the crowds its toe tip slid 10-35 mm so).
+TEST(AgentWalk, AStanceFootIkCannotHoldLiftsInThatFrame) {
+  struct Outcome {
+    bool lifted = false;
+    std::uint32_t flags = 0;  // the leg's IK flags after the frame
+  };
+  const auto carried = [](bool rule, float push) {
+    AgentWalker w;
+    w.crowd->motion.style.lift_on_ik_miss = rule;
+    const float dt = 1.0f / 60.0f;
+    const glm::vec2 forward(0.0f, 1.2f);
+    const auto swinging = [&](int l) {
+      return w.gait(kGaitLegs + static_cast<std::uint32_t>(l) * kLegFloats + kLegSwinging) > 0.5f;
+    };
+    int leg = -1;
+    for (int f = 0; f < 600 && leg < 0; ++f) {
+      w.frame(forward, dt);
+      const float sf = gait_parameters(w.gait(kGaitHeight), w.gait(kGaitCadence)).stance_fraction();
+      for (int l = 0; l < 2; ++l) {
+        float psi = w.gait(kGaitPhase) - 0.5f * static_cast<float>(l);
+        psi -= std::floor(psi);
+        if (f > 120 && !swinging(l) && !swinging(1 - l) && psi > w.crowd->motion.style.early_lift * sf + 0.01f &&
+            psi > 0.52f && psi < sf - 0.03f)
+          leg = l;
+      }
+    }
+    EXPECT_GE(leg, 0) << "the walk reached a late stance in double support";
+    if (leg < 0) return Outcome{};
+    w.frame(forward, dt, [&](SoaTable& t) { t.f32(kWalkerAgent, kAgentPz)[0] += push; });
+    for (std::uint32_t c = 0; c < kAgentFloats; ++c) EXPECT_TRUE(std::isfinite(w.agent(c)));
+    return Outcome{swinging(leg), w.table().u32(kWalkerIkFlags, static_cast<std::uint32_t>(leg))[0]};
+  };
+  const Outcome far_told = carried(false, 0.2f), far_asked = carried(true, 0.2f);
+  const Outcome near_told = carried(false, 0.1f), near_asked = carried(true, 0.1f);
+  EXPECT_NE(far_told.flags & (kIkUnreachable | kIkLimitsInfeasible), 0u) << "IK could not hold the foot";
+  EXPECT_FALSE(far_told.lifted) << "told only by IK's flags, the foot is still down in that frame";
+  EXPECT_TRUE(far_asked.lifted) << "asked before IK, it lifts in that frame";
+  EXPECT_EQ(near_told.flags & (kIkUnreachable | kIkLimitsInfeasible), 0u) << "IK held the foot";
+  EXPECT_FALSE(near_told.lifted);
+  EXPECT_FALSE(near_asked.lifted) << "a foot IK holds stays down";
+}
+
 TEST(AgentWalk, FacingDirectionIsTheWishUnlessCarriedAcrossAtWalkingPace) {
   const float speed = 0.6f, side = 1.4f;
   const glm::vec2 wish(0.0f, 1.2f), ahead(0.0f, 10.0f);
@@ -315,7 +360,10 @@ TEST(AgentWalk, AStanceFootTwistedPastTheLegsLiftsEarly) {
   std::size_t clamped[2] = {0, 0};
   for (int rule = 0; rule < 2; ++rule) {
     AgentWalker w;
-    if (rule == 0) w.crowd->motion.style.lift_twist = 10.0f;  // off
+    if (rule == 0) {
+      w.crowd->motion.style.lift_twist = 10.0f;  // off, and so is the lift in the frame IK cannot hold the foot,
+      w.crowd->motion.style.lift_on_ik_miss = false;  // which lifts such a foot too (in the frame the clamp binds)
+    }
     GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
     const float dt = 1.0f / 60.0f;
     for (int f = 0; f < 900; ++f) {
