@@ -590,21 +590,19 @@ bool stance_foot_holds(const LocomotionRig& rig, const LocomotionColumns& lanes,
                        const glm::vec3& root_translation, const glm::vec3& goal, const glm::quat& orientation) {
   const Skeleton& sk = rig.skeleton;
   const LimbChain& limb = rig.limbs[leg == 0 ? kLeftLeg : kRightLeg];
-  // The hip's ancestors, root first.
-  std::int32_t chain[kMaxJointsPerRig];
-  int depth = 0;
-  for (std::int32_t j = sk.parents[limb.upper]; j >= 0 && depth < static_cast<int>(kMaxJointsPerRig); j = sk.parents[j])
-    chain[depth++] = j;
+  // The hip's parent frame, composed from the root down as the IK system composes it.
   glm::mat3 m(1.0f);
   glm::vec3 offset = root_translation;
-  for (int k = depth - 1; k >= 0; --k) {
-    const auto j = static_cast<std::uint32_t>(chain[k]);
+  bool root = true;
+  for (const std::int32_t joint : rig.hip_ancestors[leg]) {
+    const auto j = static_cast<std::uint32_t>(joint);
     const glm::quat q(lanes.local_rotation.at(j * 4 + 3, i), lanes.local_rotation.at(j * 4 + 0, i),
                       lanes.local_rotation.at(j * 4 + 1, i), lanes.local_rotation.at(j * 4 + 2, i));
     const glm::mat3 r = glm::mat3_cast(q);
-    const glm::vec3 c = sk.centers[j];
-    offset = k == depth - 1 ? c - r * c + root_translation : m * (c - r * c) + offset;
-    m = k == depth - 1 ? r : m * r;
+    const glm::vec3 c = sk.centers[joint];
+    offset = root ? c - r * c + root_translation : m * (c - r * c) + offset;
+    m = root ? r : m * r;
+    root = false;
   }
   const glm::mat3 to_rest = glm::transpose(m);
   LimbSolveInput in;
@@ -1199,6 +1197,10 @@ LocomotionRig make_locomotion_rig(const Skeleton& skeleton) {
   LocomotionRig rig;
   rig.skeleton = skeleton;
   rig.limbs = make_limbs(skeleton);
+  for (int leg = 0; leg < 2; ++leg) {
+    for (std::int32_t j = skeleton.parents[rig.limbs[leg == 0 ? kLeftLeg : kRightLeg].upper]; j >= 0; j = skeleton.parents[j])
+      rig.hip_ancestors[leg].insert(rig.hip_ancestors[leg].begin(), j);
+  }
   auto need = [&](const char* name) {
     const std::int32_t j = skeleton.find_joint(name);
     if (j < 0) throw std::invalid_argument(std::string("locomotion: skeleton '") + skeleton.name + "' has no " + name);

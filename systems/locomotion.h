@@ -313,9 +313,10 @@ struct LocomotionRig {
   float stance_reach[2][kStanceKnots];
   float rig_height = 1.75f;          // stature of the rig (skull_tip, else top joint + 0.13 m)
   CardinalSpline wrist_path[2];      // closed loops in humanoid space: back, mid, front, mid
-  // The skeleton itself (centres, hierarchy, limits), for agents' stance legs that ask IK before they lift
-  // (systems/locomotion.cpp stance_foot_holds).
+  // The skeleton itself (centres, hierarchy, limits) and each hip's ancestors, root first, for agents' stance legs
+  // that ask IK before they lift (systems/locomotion.cpp stance_foot_holds).
   Skeleton skeleton;
+  std::vector<std::int32_t> hip_ancestors[2];
 };
 
 // Throws std::invalid_argument when the skeleton lacks a limb joint or the midtarsal joints.
