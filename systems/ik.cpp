@@ -498,85 +498,40 @@ LimbSolveResult solve_limb(const Skeleton& skeleton, const LimbChain& limb, cons
 namespace {
 
 // G(j) of the chain: x (rest humanoid coordinates) -> m x + g (posed humanoid coordinates).
-struct Frame {
-  dmat3 m{1.0};
-  dvec3 g{0.0};
-};
-
 void ik_range(const IkJob& job, const std::int32_t* ancestors, std::size_t ancestor_count, std::size_t first,
               std::size_t last) {
   const Skeleton& skeleton = *job.skeleton;
   const std::span<const LimbChain> limbs = job.limbs;
   const std::size_t stride = job.local_rotation.stride;
   float* const local_rotation = job.local_rotation.base;
-  const ColumnView<const float>& root_translation = job.root_translation;
+  const ColumnView<const float> rotations_in = job.local_rotation;
   // Indexed by joint; only the ancestors' entries are written and read. On the stack (48 KiB at the joint cap)
   // rather than a vector per chunk, so run() allocates nothing.
-  Frame frames[kMaxJointsPerRig];
+  JointFrame frames[kMaxJointsPerRig];
   for (std::size_t i = first; i < last; ++i) {
-    // Parent frames of the upper joints, parents first (ancestors is in index order, parents[j] < j).
+    // Parent frames of the upper joints, parents first (ancestors is in index order, parents[j] < j), each once
+    // per walker however many limbs hang from it.
     for (std::size_t a = 0; a < ancestor_count; ++a) {
       const std::int32_t j = ancestors[a];
-      const float* q = local_rotation + static_cast<std::size_t>(j) * 4 * stride + i;
-      const dmat3 r = quat_matrix(q[0], q[stride], q[2 * stride], q[3 * stride]);
-      const dvec3 c(skeleton.centers[j]);
       const int p = skeleton.parents[j];
-      Frame& f = frames[j];
-      if (p < 0) {
-        const dvec3 root(root_translation.at(0, i), root_translation.at(1, i), root_translation.at(2, i));
-        f.m = r;
-        f.g = c - r * c + root;
-      } else {
-        const Frame& pf = frames[p];
-        f.m = pf.m * r;
-        f.g = pf.m * (c - r * c) + pf.g;
-      }
+      frames[j] = joint_frame(skeleton, j, p < 0 ? JointFrame{} : frames[p], rotations_in, job.root_translation, i);
     }
     for (std::size_t k = 0; k < limbs.size(); ++k) {
       const LimbChain& limb = limbs[k];
       const auto limb_index = static_cast<std::uint32_t>(k);
-      auto goal_at = [&](std::uint32_t c) { return job.ik_goal.at(limb_index * kIkGoalFloats + c, i); };
       std::uint32_t* flags_out = &job.ik_flags.at(limb_index, i);
       float* error_out = &job.ik_error.at(limb_index * kIkResultFloats + 0, i);
-      const std::int32_t mode_value = job.ik_mode.at(limb_index, i);
-      // Anything but 1 or 2 reads as Off.
-      IkMode mode = IkMode::Off;
-      if (mode_value == static_cast<std::int32_t>(IkMode::Position))
-        mode = IkMode::Position;
-      else if (mode_value == static_cast<std::int32_t>(IkMode::PositionOrientation))
-        mode = IkMode::PositionOrientation;
-      if (mode == IkMode::Off) {
-        *flags_out = 0u, *error_out = 0.0f;
-        continue;
-      }
-      const glm::vec3 goal_h(goal_at(kGoalPx), goal_at(kGoalPy), goal_at(kGoalPz));
-      if (!is_finite(goal_h)) {
-        // Leave the limb as animation posed it: a broken goal must not snap it to rest.
-        *flags_out = kIkInvalidInput, *error_out = 0.0f;
-        continue;
-      }
-      Frame parent;
+      JointFrame parent;
       const int p = skeleton.parents[limb.upper];
       if (p >= 0)
         parent = frames[p];
       else
-        parent.g = dvec3(root_translation.at(0, i), root_translation.at(1, i), root_translation.at(2, i));
-      const dmat3 to_rest = glm::transpose(parent.m);  // rotation inverse
-
+        parent.g = glm::dvec3(job.root_translation.at(0, i), job.root_translation.at(1, i), job.root_translation.at(2, i));
       LimbSolveInput in;
-      in.mode = mode;
-      in.goal = glm::vec3(to_rest * (dvec3(goal_h) - parent.g));
-      in.swivel_offset = goal_at(kGoalSwivel);
-      const glm::vec3 pole_h(goal_at(kGoalPoleX), goal_at(kGoalPoleY), goal_at(kGoalPoleZ));
-      // Zero = the rig's pole, already in the parent's rest axes; a given pole is in humanoid space.
-      in.pole = (pole_h == glm::vec3(0.0f)) ? limb.pole : glm::vec3(to_rest * dvec3(pole_h));
-      if (mode == IkMode::PositionOrientation) {
-        const glm::quat q_h(goal_at(kGoalQw), goal_at(kGoalQx), goal_at(kGoalQy), goal_at(kGoalQz));
-        if (is_finite(q_h)) {
-          in.orientation = to_quat(to_rest * quat_matrix(q_h));
-        } else {
-          in.orientation = q_h;  // the solver flags it and solves for the position only
-        }
+      const LimbRequest request = limb_solve_input(limb, limb_index, parent, job.ik_goal, job.ik_mode, i, in);
+      if (request != LimbRequest::Solve) {
+        *flags_out = request == LimbRequest::InvalidGoal ? kIkInvalidInput : 0u, *error_out = 0.0f;
+        continue;
       }
       const LimbSolveResult r = solve_limb(skeleton, limb, in);
       const std::int32_t joints[3] = {limb.upper, limb.middle, limb.lower};
@@ -593,6 +548,56 @@ void ik_range(const IkJob& job, const std::int32_t* ancestors, std::size_t ances
 }
 
 }  // namespace
+
+JointFrame joint_frame(const Skeleton& skeleton, std::int32_t joint, const JointFrame& parent,
+                       const ColumnView<const float>& local_rotation, const ColumnView<const float>& root_translation,
+                       std::size_t i) {
+  const auto j = static_cast<std::uint32_t>(joint);
+  const dmat3 r = quat_matrix(local_rotation.at(j * 4 + 0, i), local_rotation.at(j * 4 + 1, i),
+                              local_rotation.at(j * 4 + 2, i), local_rotation.at(j * 4 + 3, i));
+  const dvec3 c(skeleton.centers[j]);
+  JointFrame f;
+  if (skeleton.parents[j] < 0) {
+    const dvec3 root(root_translation.at(0, i), root_translation.at(1, i), root_translation.at(2, i));
+    f.m = r;
+    f.g = c - r * c + root;
+  } else {
+    f.m = parent.m * r;
+    f.g = parent.m * (c - r * c) + parent.g;
+  }
+  return f;
+}
+
+LimbRequest limb_solve_input(const LimbChain& limb, std::uint32_t limb_index, const JointFrame& parent,
+                             const ColumnView<const float>& ik_goal, const ColumnView<const std::int32_t>& ik_mode,
+                             std::size_t i, LimbSolveInput& input) {
+  auto goal_at = [&](std::uint32_t c) { return ik_goal.at(limb_index * kIkGoalFloats + c, i); };
+  // Anything but 1 or 2 reads as Off.
+  const std::int32_t mode_value = ik_mode.at(limb_index, i);
+  IkMode mode = IkMode::Off;
+  if (mode_value == static_cast<std::int32_t>(IkMode::Position))
+    mode = IkMode::Position;
+  else if (mode_value == static_cast<std::int32_t>(IkMode::PositionOrientation))
+    mode = IkMode::PositionOrientation;
+  if (mode == IkMode::Off) return LimbRequest::Off;
+  const glm::vec3 goal_h(goal_at(kGoalPx), goal_at(kGoalPy), goal_at(kGoalPz));
+  // Leave the limb as animation posed it: a broken goal must not snap it to rest.
+  if (!is_finite(goal_h)) return LimbRequest::InvalidGoal;
+  const dmat3 to_rest = glm::transpose(parent.m);  // rotation inverse
+  input = LimbSolveInput{};
+  input.mode = mode;
+  input.goal = glm::vec3(to_rest * (dvec3(goal_h) - parent.g));
+  input.swivel_offset = goal_at(kGoalSwivel);
+  const glm::vec3 pole_h(goal_at(kGoalPoleX), goal_at(kGoalPoleY), goal_at(kGoalPoleZ));
+  // Zero = the rig's pole, already in the parent's rest axes; a given pole is in humanoid space.
+  input.pole = (pole_h == glm::vec3(0.0f)) ? limb.pole : glm::vec3(to_rest * dvec3(pole_h));
+  if (mode == IkMode::PositionOrientation) {
+    const glm::quat q_h(goal_at(kGoalQw), goal_at(kGoalQx), goal_at(kGoalQy), goal_at(kGoalQz));
+    // A non-finite orientation goes on as it is: the solver flags it and solves for the position only.
+    input.orientation = is_finite(q_h) ? to_quat(to_rest * quat_matrix(q_h)) : q_h;
+  }
+  return LimbRequest::Solve;
+}
 
 bool IkJob::validate() const {
   if (!skeleton || limbs.empty() || limbs.size() > kIkLimbs) return false;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include "components/skeleton.h"
@@ -80,6 +81,33 @@ struct LimbSolveResult {
 };
 
 LimbSolveResult solve_limb(const Skeleton& skeleton, const LimbChain& limb, const LimbSolveInput& input);
+
+// ---- One limb as the system sees it ----------------------------------------------------------------------------
+// The two steps between a walker's columns and solve_limb, shared by the system and by anything that must know
+// ahead what the system will answer (locomotion's stance_foot_holds asks before lifting a foot), so the two cannot
+// drift apart: the same inputs give the same flags, bit for bit.
+
+// A joint's frame in humanoid space for one walker's pose: the point p, given in the rest coordinates of the
+// joint's children, is at m * p + g. Double precision, as the system composes it.
+struct JointFrame {
+  glm::dmat3 m{1.0};
+  glm::dvec3 g{0.0};
+};
+
+// Joint `joint`'s frame for walker i: its local rotation (local_rotation, joints*4, x y z w; need not be unit) about
+// its rest centre, composed onto its parent's frame `parent`; the root (no parent) rides on root_translation (3).
+JointFrame joint_frame(const Skeleton& skeleton, std::int32_t joint, const JointFrame& parent,
+                       const ColumnView<const float>& local_rotation, const ColumnView<const float>& root_translation,
+                       std::size_t i);
+
+// What limb `limb_index` of walker i asks: Off (its mode neither Position nor PositionOrientation: the limb is left
+// alone), InvalidGoal (a non-finite goal position: left as animation posed it), or Solve with `input` filled from
+// its goal slot (ik_goal, kIkLimbs*kIkGoalFloats) turned from humanoid space into `parent`, the frame of the upper
+// joint's parent (for an upper joint that is the root: identity at root_translation, which the caller gives).
+enum class LimbRequest : std::uint8_t { Off, InvalidGoal, Solve };
+LimbRequest limb_solve_input(const LimbChain& limb, std::uint32_t limb_index, const JointFrame& parent,
+                             const ColumnView<const float>& ik_goal, const ColumnView<const std::int32_t>& ik_mode,
+                             std::size_t i, LimbSolveInput& input);
 
 // ---- The system --------------------------------------------------------------------------------------------
 

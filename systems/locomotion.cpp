@@ -582,35 +582,23 @@ bool unreachable(const LocomotionColumns& lanes, int leg, std::size_t i) {
   return (lanes.ik_flags.at(static_cast<std::uint32_t>(leg), i) & (kIkUnreachable | kIkLimitsInfeasible)) != 0u;
 }
 
-// Whether IK will hold leg `leg`'s ankle on `goal` with the foot at `orientation` (humanoid space, as written for
-// this frame) under the local rotations and root translation locomotion wrote for walker i: solve_limb asked as the
-// IK system will ask it (the hip's parent frame composed from the root down), its flags read. In float where the
-// system works in double: a goal within rounding of a limit may read either way, which only moves a lift by a frame.
-bool stance_foot_holds(const LocomotionRig& rig, const LocomotionColumns& lanes, std::size_t i, int leg,
-                       const glm::vec3& root_translation, const glm::vec3& goal, const glm::quat& orientation) {
-  const Skeleton& sk = rig.skeleton;
-  const LimbChain& limb = rig.limbs[leg == 0 ? kLeftLeg : kRightLeg];
-  // The hip's parent frame, composed from the root down as the IK system composes it.
-  glm::mat3 m(1.0f);
-  glm::vec3 offset = root_translation;
-  bool root = true;
-  for (const std::int32_t joint : rig.hip_ancestors[leg]) {
-    const auto j = static_cast<std::uint32_t>(joint);
-    const glm::quat q(lanes.local_rotation.at(j * 4 + 3, i), lanes.local_rotation.at(j * 4 + 0, i),
-                      lanes.local_rotation.at(j * 4 + 1, i), lanes.local_rotation.at(j * 4 + 2, i));
-    const glm::mat3 r = glm::mat3_cast(q);
-    const glm::vec3 c = sk.centers[joint];
-    offset = root ? c - r * c + root_translation : m * (c - r * c) + offset;
-    m = root ? r : m * r;
-    root = false;
-  }
-  const glm::mat3 to_rest = glm::transpose(m);
+// Whether IK will hold leg `leg`'s ankle on the goal locomotion just wrote for walker i (its goal slot, mode and
+// the local rotations and root translation written this frame): the IK system's own steps (ik.h joint_frame,
+// limb_solve_input, solve_limb) run ahead of it, so the answer is the system's flags bit for bit.
+bool stance_foot_holds(const LocomotionRig& rig, const LocomotionColumns& lanes, std::size_t i, int leg) {
+  const auto limb_index = static_cast<std::uint32_t>(leg == 0 ? kLeftLeg : kRightLeg);
+  const LimbChain& limb = rig.limbs[limb_index];
+  // The hip's parent frame, composed from the root down (hip_ancestors is that chain, root first).
+  JointFrame parent;
+  if (rig.hip_ancestors[leg].empty())
+    parent.g = glm::dvec3(lanes.root_translation.at(0, i), lanes.root_translation.at(1, i),
+                          lanes.root_translation.at(2, i));
+  for (const std::int32_t joint : rig.hip_ancestors[leg])
+    parent = joint_frame(rig.skeleton, joint, parent, lanes.local_rotation, lanes.root_translation, i);
   LimbSolveInput in;
-  in.mode = IkMode::PositionOrientation;
-  in.goal = to_rest * (goal - offset);
-  in.orientation = glm::quat_cast(to_rest * glm::mat3_cast(orientation));
-  in.pole = limb.pole;
-  return (solve_limb(sk, limb, in).flags & (kIkUnreachable | kIkLimitsInfeasible)) == 0u;
+  if (limb_solve_input(limb, limb_index, parent, lanes.ik_goal, lanes.ik_mode, i, in) != LimbRequest::Solve)
+    return true;  // nothing IK will pull on
+  return (solve_limb(rig.skeleton, limb, in).flags & (kIkUnreachable | kIkLimitsInfeasible)) == 0u;
 }
 
 // Whether a stance leg at leg phase psi (stance fraction sf) that its leg cannot reach lifts early
@@ -1173,7 +1161,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
         g.leg(1 - leg, kLegSwinging) < 0.5f) {
       const float psi = frac(phase - 0.5f * static_cast<float>(leg));
       if (lifts_early(psi, sf, style) &&
-          !stance_foot_holds(rig, lanes, i, leg, root_translation, goal, orientation))
+          !stance_foot_holds(rig, lanes, i, leg))
         lift_off(leg, psi, psi / sf, strike_pitch, psi);
     }
   }

@@ -11,7 +11,9 @@
 
 #include <tbb/global_control.h>
 
+#include "components/walker.h"
 #include "io/hanim_loader.h"
+#include "motion/gait.h"
 #include "scene/body_settings.h"
 #include "scene/crowd.h"
 #include "scene/crowd_agents.h"
@@ -19,6 +21,8 @@
 #include "scene/state_hash.h"
 #include "scene/step.h"
 #include "systems/gait_metrics.h"
+#include "systems/ik.h"
+#include "systems/locomotion.h"
 #include "tests/sanitizer_scale.h"
 
 namespace strata {
@@ -212,6 +216,48 @@ TEST(ScenarioCrowd, PlantedFeetHoldTheBodiesInAJam) {
   EXPECT_LT(o[0].gait.foot_slide_mm_max, 0.75 * o[1].gait.foot_slide_mm_max);
   EXPECT_EQ(o[0].crowd.overlaps, 0u);
   EXPECT_EQ(o[0].gait.nan_count, 0u);
+}
+
+// Locomotion asks IK ahead whether a rolling stance foot in its early-lift window (both feet down) can be held,
+// and lifts it in that frame if not (GaitStyle::lift_on_ik_miss, stance_foot_holds): it runs the IK system's own
+// steps (ik.h joint_frame, limb_solve_input), so every such foot it leaves down is one the system then holds, in
+// every frame of a jam. Without the rule the same jam does leave such feet down that IK cannot hold (the check
+// can fail). Frames, walkers and legs counted over 20 s of a 24-agent circle.
+TEST(ScenarioCrowd, EveryStanceFootLeftDownInItsLiftWindowIsOneIkHolds) {
+  std::size_t checked[2] = {0, 0}, missed[2] = {0, 0};
+  for (int rule = 0; rule < 2; ++rule) {
+    std::unique_ptr<Crowd> crowd = scenario_crowd(small_circle(48, 6.0f));
+    crowd->motion.style.lift_on_ik_miss = rule == 1;
+    const GaitStyle& style = crowd->motion.style;
+    Profiler profiler(120, false);
+    for (int f = 0; f < 600; ++f) {
+      step(*crowd, 1.0f / 30.0f, profiler);
+      for (std::size_t s = 0; s < kDetailSlots; ++s) {
+        const SoaTable& t = crowd->world.table(crowd->tables[s]);
+        for (std::size_t r = 0; r < t.size(); ++r) {
+          auto gait = [&](std::uint32_t c) { return t.f32(kWalkerGait, c)[r]; };
+          auto leg_at = [&](int l, std::uint32_t c) {
+            return gait(kGaitLegs + static_cast<std::uint32_t>(l) * kLegFloats + c);
+          };
+          if (gait(kGaitIdle) > 0.0f || leg_at(0, kLegSwinging) > 0.5f || leg_at(1, kLegSwinging) > 0.5f) continue;
+          const float sf = gait_parameters(gait(kGaitHeight), gait(kGaitCadence)).stance_fraction();
+          for (int l = 0; l < 2; ++l) {
+            float psi = gait(kGaitPhase) - 0.5f * static_cast<float>(l);
+            psi -= std::floor(psi);
+            if (!(psi < sf && psi >= std::max(style.early_lift * sf, 0.505f))) continue;
+            ++checked[rule];
+            const std::uint32_t flags = t.u32(kWalkerIkFlags, static_cast<std::uint32_t>(l))[r];
+            if ((flags & (kIkUnreachable | kIkLimitsInfeasible)) != 0u) ++missed[rule];
+          }
+        }
+      }
+    }
+    std::printf("lift_on_ik_miss %s: %zu stance legs in their window with both feet down, %zu IK could not hold\n",
+                rule == 1 ? "on" : "off", checked[rule], missed[rule]);
+  }
+  EXPECT_GT(checked[1], 500u);
+  EXPECT_EQ(missed[1], 0u) << "a foot left down that IK could not hold";
+  EXPECT_GT(missed[0], 0u) << "without the rule the jam leaves such feet down";
 }
 
 TEST(ScenarioCrowd, RoomEmptiesThroughItsDoor) {
