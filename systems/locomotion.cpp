@@ -411,6 +411,35 @@ glm::vec3 hip_at_root(const LocomotionRig& rig, const PelvisMotion& motion, cons
   return root + (hip_position(rig, motion, leg) - glm::vec3(motion.sway, 0.0f, 0.0f));
 }
 
+// How far (humanoid units, along the ground) the hip at `hip` is beyond what leg `leg` reaches of its ankle at
+// `ankle` (both humanoid, the foot turned `foot_yaw` from the body): past the leg's length with the pelvis lag_dip
+// below standing, and across the foot past the ankle's roll (the shin leans over the foot's long axis, the ankle
+// inverting or everting as far as it leans: at most ankle_roll_limit, 20 degrees for H-Anim's default, past which
+// IK clamps the foot and its edge or toe tip leaves the ground; measured from the rest stance's offset). Moving
+// the hip by minus this, or the ankle by it, brings them within reach; zero when they are. The hold (walk_one)
+// moves the body so, a landing foot (GaitStyle::land_within_reach) moves its footprint.
+glm::vec3 beyond_reach(const LocomotionRig& rig, const GaitStyle& style, int leg, const glm::vec3& hip,
+                       const glm::vec3& ankle, float foot_yaw, float scale) {
+  const float reach = kReachUsed * rig.leg_reach[leg];
+  const float below = hip.y - style.lag_dip / scale - ankle.y;  // hip above the ankle at the lowest pelvis
+  if (below <= 0.0f || below >= reach) return glm::vec3(0.0f);
+  const float allowed = std::sqrt(reach * reach - below * below);
+  glm::vec2 apart(hip.x - ankle.x, hip.z - ankle.z);
+  glm::vec3 beyond(0.0f);
+  const float d = glm::length(apart);
+  if (d > allowed) {
+    beyond += glm::vec3(apart.x, 0.0f, apart.y) * ((d - allowed) / d);
+    apart *= allowed / d;
+  }
+  const glm::vec2 across(std::cos(foot_yaw), -std::sin(foot_yaw));  // the foot's +X in the body's frame
+  const float rest_across = rig.hip_rest[leg].x - rig.ankle_rest[leg].x;
+  const float lateral = glm::dot(apart, across) - rest_across;
+  const float lateral_room = below * std::tan(kRollUsed * rig.ankle_roll_limit);
+  if (std::abs(lateral) > lateral_room)
+    beyond += glm::vec3(across.x, 0.0f, across.y) * (lateral - std::copysign(lateral_room, lateral));
+  return beyond;
+}
+
 // A stance heel's hold (stance_pose) for the hip at `hip` (humanoid units) of a walker placed at `placement`:
 // the hip in world units and the hip-ankle distance the normative stance knee gives at tau.
 HipHold hip_hold_at(const LocomotionRig& rig, const Pose2& placement, const glm::vec3& hip, int leg, float tau,
@@ -825,6 +854,18 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     begin_swing(g, leg, from.position, g.leg(leg, kLegPlantHeading), p, to.position, to.heading,
                 track.distance_at(strike_in, lead), early);
   };
+  // Agents: footprint `to` of swinging leg `leg` (heading to_heading) moved, if need be, to land within the leg's
+  // reach of the hip for the pelvis at `at` as at gait phase `at_phase` (GaitStyle::land_within_reach).
+  auto within_reach = [&](int leg, glm::vec3& to, float to_heading, const Pose2& at, float at_phase) {
+    const AnklePose strike = stance_pose(rig, leg, to, to_heading, 0.0f, scale, style, nullptr, strike_pitch);
+    const glm::vec3 beyond =
+        beyond_reach(rig, style, leg, hip_position(rig, pelvis_motion(style, at_phase), leg),
+                     WalkerFrame{at.position, at.heading, scale}.to_humanoid(strike.position), to_heading - at.heading,
+                     scale);
+    const glm::vec3 shift = yaw(at.heading) * beyond * scale;  // world, along the ground
+    to.x += shift.x;
+    to.z += shift.z;
+  };
   // ---- Legs: footprint events, then each ankle goal (world, then humanoid space) ---------------------------
   AnklePose ankle[2];
   float toe_pitch[2] = {0.0f, 0.0f};
@@ -832,9 +873,11 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     const float psi = frac(phase - 0.5f * static_cast<float>(leg));
     const bool swinging = g.leg(leg, kLegSwinging) > 0.5f;
     if (swinging && psi < 0.5f) {
-      // Heel strike (the leg's phase wrapped): the swing target becomes the planted footprint.
-      plant_foot(g, leg, {g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)}, g.leg(leg, kLegToHeading),
-                 g.leg(leg, kLegToDistance));
+      // Heel strike (the leg's phase wrapped): the swing target becomes the planted footprint, within reach of the
+      // body as it is now (a swing cut short by stance_hurry lands here from anywhere in its last part).
+      glm::vec3 to{g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)};
+      if (source.agents() && style.land_within_reach) within_reach(leg, to, g.leg(leg, kLegToHeading), pelvis, phase);
+      plant_foot(g, leg, to, g.leg(leg, kLegToHeading), g.leg(leg, kLegToDistance));
     } else if (!swinging && source.agents() && lanes.ik_flags.components != 0 &&
                (unreachable(lanes, leg, i) || (g.leg(1 - leg, kLegSwinging) < 0.5f && unreachable(lanes, 1 - leg, i)) ||
                 std::abs(wrap_angle(g.leg(leg, kLegPlantHeading) - pelvis.heading)) > style.lift_twist) &&
@@ -858,6 +901,15 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       g.leg(leg, kLegToZ) = to.position.z;
       g.leg(leg, kLegToHeading) = to.heading;
       g.leg(leg, kLegToDistance) = track.distance_at(strike_in, lead);
+    } else if (swinging && source.agents() && style.land_within_reach) {
+      // Past re-aiming, the target stays, but within reach of where the body will be at heel strike: a body held
+      // back by the stance foot falls behind the prediction the target was aimed at. Moved a little each frame as
+      // the body falls behind, the foot lands there without a last-frame jump.
+      const float strike_in = (1.0f - psi) * gp.cycle_time;
+      glm::vec3 to{g.leg(leg, kLegToX), g.leg(leg, kLegToY), g.leg(leg, kLegToZ)};
+      within_reach(leg, to, g.leg(leg, kLegToHeading), pelvis_ahead(strike_in), 0.5f * static_cast<float>(leg));
+      g.leg(leg, kLegToX) = to.x;
+      g.leg(leg, kLegToZ) = to.z;
     }
   }
   // Agents: standing. A walker that wants to stand goes on stepping (its last steps land beside the other foot,
@@ -1015,31 +1067,10 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     glm::vec3 back(0.0f);  // humanoid units
     for (int leg = 0; leg < 2; ++leg) {
       if (legs[leg].swinging || !binds[leg]) continue;
-      const glm::vec3 hip = hip_position(rig, motion, leg) + back;
-      const float reach = kReachUsed * rig.leg_reach[leg];
-      const glm::vec3 a = frame.to_humanoid(ankle_world[leg]);
-      const float below = hip.y - style.lag_dip / scale - a.y;  // hip above the ankle at the lowest pelvis
-      if (below <= 0.0f || below >= reach) continue;
-      const float allowed = std::sqrt(reach * reach - below * below);
-      glm::vec2 apart(hip.x - a.x, hip.z - a.z);
-      const float d = glm::length(apart);
-      if (d > allowed) {
-        back -= glm::vec3(apart.x, 0.0f, apart.y) * ((d - allowed) / d);
-        apart *= allowed / d;
-      }
-      // Sideways, the shin leans over the foot's long axis and the ankle inverts or everts as far as it leans: at
-      // most ankle_roll_limit (20 degrees for H-Anim's default), past which IK clamps the foot's orientation and
-      // its edge or toe tip leaves the ground (issue 16: a jam's sidesteps left bodies 42 cm to the side of a
-      // planted foot, the toe tip 7 cm up). Measured across the foot (its heading), from the rest stance's offset.
-      const float foot_yaw = legs[leg].plant_heading - pelvis.heading;
-      const glm::vec2 across(std::cos(foot_yaw), -std::sin(foot_yaw));  // the foot's +X in the body's frame
-      const float rest_across = rig.hip_rest[leg].x - rig.ankle_rest[leg].x;
-      const float lateral = glm::dot(apart, across) - rest_across;
-      const float lateral_room = below * std::tan(kRollUsed * rig.ankle_roll_limit);
-      if (std::abs(lateral) > lateral_room) {
-        const float excess = lateral - std::copysign(lateral_room, lateral);
-        back -= glm::vec3(across.x, 0.0f, across.y) * excess;
-      }
+      // Sideways as well (beyond_reach): a jam's sidesteps left bodies 42 cm to the side of a planted foot, the
+      // toe tip 7 cm up (issue 16).
+      back -= beyond_reach(rig, style, leg, hip_position(rig, motion, leg) + back,
+                           frame.to_humanoid(ankle_world[leg]), legs[leg].plant_heading - pelvis.heading, scale);
     }
     if (back.x != 0.0f || back.z != 0.0f) {
       glm::vec3 shift = yaw(pelvis.heading) * back * scale;  // world

@@ -251,6 +251,12 @@ struct GaitStyle {
   float stance_twist = 0.85f;
   // Agents: a swinging foot re-aims at the newest footprint prediction until this fraction of its swing.
   float retarget_until = 0.8f;
+  // Agents: a swinging foot lands within its leg's reach of the body (the hold's geometry, lag_dip) rather than
+  // where the footprint prediction put it, when the body has fallen behind that prediction (held back by the
+  // stance foot, or the swing cut short by stance_hurry): from retarget_until on, the target is moved each frame
+  // to be within reach of where the body will be at heel strike, and at heel strike of where it is. False: it lands
+  // on the prediction and the hold pulls the body to it, up to kBodyLagMax in one frame (bodies jumped 42 cm so).
+  bool land_within_reach = true;
   // Lowest cadence of a walking agent (steps/min): at a crawl the gait formula's cadence falls to 40, slow motion;
   // people easing to a stop or turning on the spot take short steps at a near-normal rate.
   float agent_min_cadence = 80.0f;

@@ -295,9 +295,13 @@ TEST(ScenarioCrowd, ArrivalsMoveInRatherThanWallingOffTheRegion) {
   // rooms with the rules (seeds 1-16 in this build with and without the turn; under ASan 3, 4 and 15 with and
   // without, 1, 2, 5 and 16 with): it became 16 (without the rules 5, 3 and 13 out). When stance feet twisted past
   // the legs came to lift early (GaitStyle::lift_twist, 2026-11-29) the runs without the rules left 4, 3 and 0 out
-  // (7), with them 0: the bar for those runs is 6. Under the sanitizers only the runs with the rules
+  // (7), with them 0: the bar for those runs was 6. When swinging feet came to land within reach of a body held
+  // back (GaitStyle::land_within_reach, the same day) they left 3, 1 and 0 out; over seeds 1-16 then, with the rules
+  // every agent of every seed came in, without them 0, 3, 3, 1, 7, 5, 3, 8, 5, 2, 6, 3, 1, 7, 2 and 0 stayed out
+  // (56 of 800): the rules matter for every seed but the two whose rooms empty anyway. Seeds 5, 8 and 14 are those
+  // that leave the most out without them (22 then; the bar is 10). Under the sanitizers only the runs with the rules
   // (tests/sanitizer_scale.h): the others only show that they matter.
-  constexpr std::uint32_t kSeeds[] = {3u, 4u, 16u};
+  constexpr std::uint32_t kSeeds[] = {5u, 8u, 14u};
   constexpr double kAgents = 50.0;
   double outside[2] = {0.0, 0.0};  // with, without the rule: agents not in the region, summed over the seeds
   for (const std::uint32_t seed : kSeeds) {
@@ -322,7 +326,7 @@ TEST(ScenarioCrowd, ArrivalsMoveInRatherThanWallingOffTheRegion) {
   }
   EXPECT_LE(outside[0], 3.0 + 1e-6) << "with the rules";
   if (!test::kSanitizedBuild) {
-    EXPECT_GE(outside[1], 6.0 - 1e-6) << "without the rules the same runs leave more outside";
+    EXPECT_GE(outside[1], 10.0 - 1e-6) << "without the rules the same runs leave more outside";
   }
 }
 

@@ -330,6 +330,67 @@ TEST(AgentWalk, AStanceFootIkCannotHoldLiftsInThatFrame) {
   EXPECT_FALSE(near_asked.lifted) << "a foot IK holds stays down";
 }
 
+// A walker carried ahead of its body while on one foot (its agent moved `push` in one frame, just after the other
+// foot lifted): the stance foot holds the body back (GaitStyle::lag_dip), and the swing, aimed where the body
+// was predicted to be, would land beyond the leg's reach ahead of it. Landing within reach
+// (GaitStyle::land_within_reach), the body catches up over the next steps instead of being pulled to the foot in
+// one frame.
+TEST(AgentWalk, AFootLandsWithinReachOfABodyHeldBehind) {
+  struct Outcome {
+    double fastest_after = 0.0;  // m/s: the body's fastest frame once the push is over
+    double lag_most = 0.0;       // m: how far the stance foot held the body behind its agent
+    GaitReport gait;
+  };
+  constexpr int kPushFrames = 10;
+  const auto carried = [](bool rule, float push) {
+    AgentWalker w;
+    w.crowd->motion.style.land_within_reach = rule;
+    GaitMetrics metrics(w.crowd->rig().skeleton, *w.crowd->motion.locomotion, w.crowd->motion.style);
+    const float dt = 1.0f / 60.0f;
+    const glm::vec2 forward(0.0f, 1.2f);
+    const auto swinging = [&](int l) {
+      return w.gait(kGaitLegs + static_cast<std::uint32_t>(l) * kLegFloats + kLegSwinging) > 0.5f;
+    };
+    const auto body = [&] {
+      return glm::vec2(w.table().f32(kWalkerPlacement, 0)[0], w.table().f32(kWalkerPlacement, 2)[0]);
+    };
+    Outcome o;
+    bool was_swinging[2] = {swinging(0), swinging(1)};
+    int pushed_at = -1;
+    glm::vec2 last = body();
+    for (int f = 0; f < 360; ++f) {
+      // After two seconds, from the frame after a foot lifts: the agent carried `push` further over kPushFrames.
+      if (pushed_at < 0 && f > 120 && swinging(0) != swinging(1) &&
+          (swinging(0) != was_swinging[0] || swinging(1) != was_swinging[1]))
+        pushed_at = f;
+      was_swinging[0] = swinging(0), was_swinging[1] = swinging(1);
+      const bool pushing = pushed_at >= 0 && f < pushed_at + kPushFrames;
+      w.frame(forward, dt, [&](SoaTable& t) {
+        if (pushing) t.f32(kWalkerAgent, kAgentPz)[0] += push / static_cast<float>(kPushFrames);
+      });
+      metrics.observe(walker_lanes(w.table(), w.crowd->joint_count()), w.crowd->motion.paths, dt);
+      const glm::vec2 now = body();
+      if (pushed_at >= 0 && !pushing) o.fastest_after = std::max<double>(o.fastest_after, glm::length(now - last) / dt);
+      o.lag_most = std::max<double>(o.lag_most, std::hypot(w.gait(kGaitLagX), w.gait(kGaitLagZ)));
+      last = now;
+    }
+    EXPECT_GE(pushed_at, 0);
+    o.gait = metrics.report();
+    return o;
+  };
+  const Outcome pulled = carried(false, 0.5f), within = carried(true, 0.5f);
+  for (const Outcome* o : {&pulled, &within})
+    std::printf("%s: held %.3f m behind, fastest body after the push %.2f m/s, foot slide %.2f mm\n",
+                o == &pulled ? "pulled to the foot" : "landing within reach", o->lag_most, o->fastest_after,
+                o->gait.foot_slide_mm_max);
+  EXPECT_GT(pulled.lag_most, 0.15) << "the stance foot held the body back";
+  EXPECT_GT(within.lag_most, 0.15);
+  EXPECT_GT(pulled.fastest_after, 3.5) << "without the rule the landing foot pulls the body to it";
+  EXPECT_LT(within.fastest_after, 2.0) << "the body catches up at a walk";
+  EXPECT_LT(within.gait.foot_slide_mm_max, 1.0);
+  EXPECT_EQ(within.gait.nan_count, 0u);
+}
+
 TEST(AgentWalk, FacingDirectionIsTheWishUnlessCarriedAcrossAtWalkingPace) {
   const float speed = 0.6f, side = 1.4f;
   const glm::vec2 wish(0.0f, 1.2f), ahead(0.0f, 10.0f);
