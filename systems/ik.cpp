@@ -497,7 +497,6 @@ LimbSolveResult solve_limb(const Skeleton& skeleton, const LimbChain& limb, cons
 
 namespace {
 
-// G(j) of the chain: x (rest humanoid coordinates) -> m x + g (posed humanoid coordinates).
 void ik_range(const IkJob& job, const std::int32_t* ancestors, std::size_t ancestor_count, std::size_t first,
               std::size_t last) {
   const Skeleton& skeleton = *job.skeleton;

@@ -330,11 +330,11 @@ TEST(AgentWalk, AStanceFootIkCannotHoldLiftsInThatFrame) {
   EXPECT_FALSE(near_asked.lifted) << "a foot IK holds stays down";
 }
 
-// A walker carried ahead of its body while on one foot (its agent moved `push` in one frame, just after the other
-// foot lifted): the stance foot holds the body back (GaitStyle::lag_dip), and the swing, aimed where the body
-// was predicted to be, would land beyond the leg's reach ahead of it. Landing within reach
+// A walker carried ahead of its body while on one foot (its agent moved 0.5 m further over ten frames, from the
+// frame after the other foot lifted): the stance foot holds the body back (GaitStyle::lag_dip), and the swing,
+// aimed where the body was predicted to be, would land beyond the leg's reach ahead of it. Landing within reach
 // (GaitStyle::land_within_reach), the body catches up over the next steps instead of being pulled to the foot in
-// one frame.
+// one frame (measured: its fastest frame after the push 1.42 m/s, without the rule 4.07 m/s).
 TEST(AgentWalk, AFootLandsWithinReachOfABodyHeldBehind) {
   struct Outcome {
     double fastest_after = 0.0;  // m/s: the body's fastest frame once the push is over
