@@ -1181,8 +1181,8 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
       const float most = kReachUsed * rig.leg_reach[leg], length = glm::length(reach);
       if (length > most) goal = hip + reach * (most / length);
     }
-    const glm::quat orientation = frame.to_humanoid(ankle[leg].orientation);
-    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, goal, orientation, IkMode::PositionOrientation);
+    write_goal(lanes, leg == 0 ? kLeftLeg : kRightLeg, i, goal, frame.to_humanoid(ankle[leg].orientation),
+               IkMode::PositionOrientation);
     // Agents: a rolling stance foot in its early-lift window (both feet down) that IK cannot hold in this very
     // frame lifts now, from this pose, rather than next frame off IK's flags: in the frame the leg's limits first
     // bind, IK's clamp turns the foot about the ankle, and its toe tip moved 10-35 mm along the ground before the
@@ -1191,8 +1191,7 @@ void walk_one(const LocomotionRig& rig, const TrackSource& source, const Locomot
     if (source.agents() && style.lift_on_ik_miss && settle <= 0.0f && g.leg(leg, kLegSwinging) < 0.5f &&
         g.leg(1 - leg, kLegSwinging) < 0.5f) {
       const float psi = frac(phase - 0.5f * static_cast<float>(leg));
-      if (lifts_early(psi, sf, style) &&
-          !stance_foot_holds(rig, lanes, i, leg))
+      if (lifts_early(psi, sf, style) && !stance_foot_holds(rig, lanes, i, leg))
         lift_off(leg, psi, psi / sf, strike_pitch, psi);
     }
   }
